@@ -1,0 +1,31 @@
+// What a run reports per frame: the state's health and the error of every active constraint
+// family (only the families the scene has are filled in).
+#pragma once
+
+#include <cstddef>
+#include <optional>
+
+namespace seiche {
+
+struct FluidError {
+  double mean = 0.0;  ///< mean over fluid particles of max(rho / rho0 - 1, 0)
+  double max = 0.0;   ///< max over fluid particles of the same
+};
+
+struct DistanceConstraintError {
+  double mean = 0.0;  ///< mean |C| / rest_length (|C| in m for zero rest length)
+  double max = 0.0;
+};
+
+struct FrameMetrics {
+  int frame = 0;                  ///< 1-based
+  double time = 0.0;              ///< simulated time at the end of the frame (s)
+  std::size_t particles = 0;
+  double kinetic_energy = 0.0;    ///< J, sum of m v^2 / 2 over free particles
+  double max_speed = 0.0;         ///< m/s
+  std::size_t non_finite = 0;     ///< count of NaN / inf values in positions and velocities
+  std::optional<FluidError> fluid;
+  std::optional<DistanceConstraintError> distance;
+};
+
+}  // namespace seiche

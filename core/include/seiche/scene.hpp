@@ -1,0 +1,104 @@
+// The scene definition: plain structs with documented defaults and units. The JSON scene format
+// (docs/scene-format.md) maps 1:1 onto these structs: a key's name is the member's name, and a
+// key left out takes the default written here. Keep the two in step.
+#pragma once
+
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace seiche {
+
+using Vec3 = std::array<float, 3>;
+
+/// "solver": time stepping and the fluid solver's numerical settings.
+struct SolverDef {
+  double frame_dt = 1.0 / 60.0;  ///< s, time per output frame
+  int substeps = 8;              ///< XPBD substeps per frame (1..10000)
+  int iterations = 2;            ///< constraint iterations per substep (1..10000)
+  Vec3 gravity{0.0f, -9.81f, 0.0f};  ///< m/s^2
+  /// PBF constraint-force mixing epsilon, relative to the lambda denominator of a particle with
+  /// a full rest neighborhood (dimensionless, >= 0): larger is softer and more stable; below
+  /// about 0.3, one iteration per substep can overshoot and gain energy.
+  float relaxation = 0.3f;
+  /// Artificial pressure s_corr = -k (W(r) / W(dq h))^n against tensile instability (PBF eq. 13).
+  float tensile_k = 0.1f;   ///< k (dimensionless, >= 0; 0 turns it off)
+  int tensile_n = 4;        ///< n, an integer in 1..8
+  float tensile_dq = 0.2f;  ///< dq as a fraction of the kernel radius, in (0, 1)
+};
+
+/// "domain": the box that holds every particle. Particles are projected back inside it.
+struct DomainDef {
+  Vec3 min{0.0f, 0.0f, 0.0f};  ///< m
+  Vec3 max{1.0f, 1.0f, 1.0f};  ///< m, > min on every axis
+  float friction = 0.0f;       ///< Coulomb friction coefficient of the walls (>= 0)
+};
+
+struct BoxDef {
+  Vec3 min{0.0f, 0.0f, 0.0f};  ///< m
+  Vec3 max{0.0f, 0.0f, 0.0f};  ///< m, >= min on every axis
+};
+
+/// One block of "fluids": a box filled with particles on a lattice. All fluid blocks of a scene
+/// share one fluid material: spacing, kernel_radius, rest_density, viscosity and vorticity must
+/// agree. A block holds 1 to 50 million particles and lies inside the domain.
+struct FluidDef {
+  /// Required. Lattice sites at (i + 0.5) * spacing from box.min, floor(extent / spacing + 1e-4)
+  /// of them per axis.
+  BoxDef box;
+  float spacing = 0.02f;          ///< m, particle spacing (> 0); particle mass = rest_density * spacing^3
+  float kernel_radius = 2.0f;     ///< SPH smoothing radius h in units of spacing (>= 1)
+  float rest_density = 1000.0f;   ///< kg/m^3 (> 0)
+  float viscosity = 0.01f;        ///< XSPH viscosity coefficient c, dimensionless in [0, 1]; 0 = off
+  float vorticity = 0.0f;         ///< vorticity confinement strength epsilon (m/s, >= 0); 0 = off
+  Vec3 velocity{0.0f, 0.0f, 0.0f};  ///< m/s, initial velocity of every particle of the block
+};
+
+/// One entry of "particles": a raw particle (for raw constraints and worked examples).
+struct ParticleDef {
+  Vec3 x{0.0f, 0.0f, 0.0f};  ///< m, required, inside the domain
+  Vec3 v{0.0f, 0.0f, 0.0f};  ///< m/s
+  float mass = 1.0f;         ///< kg (>= 0); 0 pins the particle
+};
+
+/// One entry of "distance_constraints": |x_i - x_j| = rest_length, XPBD with compliance.
+/// i and j (both required, i != j) index "particles" (in file order).
+struct DistanceConstraintDef {
+  int i = -1;
+  int j = -1;
+  /// m (>= 0). Absent in the scene: stored as -1, meaning "the initial distance between i and j";
+  /// an explicit negative value in a scene is an error.
+  float rest_length = -1.0f;
+  float compliance = 0.0f;  ///< m/N (inverse stiffness, >= 0); 0 = infinitely stiff
+};
+
+/// One entry of "colliders": exactly one of "plane", "box", "sphere", plus a friction value.
+struct ColliderDef {
+  enum class Shape { Plane, Box, Sphere };
+  Shape shape = Shape::Plane;
+  Vec3 point{0.0f, 0.0f, 0.0f};   ///< plane: a point on it (m)
+  Vec3 normal{0.0f, 1.0f, 0.0f};  ///< plane: points into the free side (normalized on load)
+  BoxDef box;                     ///< box: solid axis-aligned box (m)
+  Vec3 center{0.0f, 0.0f, 0.0f};  ///< sphere: center (m)
+  float radius = 0.0f;            ///< sphere: radius (m, > 0, required)
+  float friction = 0.0f;          ///< Coulomb friction coefficient (>= 0)
+};
+
+/// "output": what a run writes by default (the command line overrides it).
+struct OutputDef {
+  int frames = 60;  ///< number of frames to simulate (>= 1)
+};
+
+struct SceneDef {
+  std::string name = "scene";  ///< "name" (non-empty); absent: the file's stem, or "scene" for text
+  SolverDef solver;
+  DomainDef domain;
+  OutputDef output;
+  std::vector<FluidDef> fluids;
+  std::vector<ParticleDef> particles;
+  std::vector<DistanceConstraintDef> distance_constraints;
+  std::vector<ColliderDef> colliders;
+};
+
+}  // namespace seiche

@@ -1,0 +1,92 @@
+// The simulation: owns the particle store and the constraint data of a scene, assembles the
+// substep pipeline from what the scene contains, and steps it.
+//
+// One substep (XPBD, "small steps"):
+//   predict          v += dt g, p = x + dt v
+//   neighbors        cell keys -> counting sort -> reorder the store -> neighbor lists
+//   iterations x     every constraint pass (fluid density, distance, collisions, ...)
+//   update           v = (p - x) / dt, x = p
+//   velocity passes  vorticity confinement, XSPH viscosity
+// A pass exists only if the scene needs it; new materials add their passes to the lists.
+#pragma once
+
+#include <cstddef>
+#include <functional>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "seiche/frame_metrics.hpp"
+#include "seiche/particle_store.hpp"
+#include "seiche/pass_timer.hpp"
+#include "seiche/scene.hpp"
+
+namespace seiche {
+
+class FluidSolver;
+class DistanceSolver;
+struct Neighborhood;
+namespace kernels {
+struct ParticleView;
+struct CollisionShape;
+struct CollisionParams;
+}  // namespace kernels
+
+/// What every pass sees during one substep.
+struct StepContext {
+  float dt = 0.0f;  ///< substep length (s)
+  int substep = 0;
+  int iteration = 0;
+};
+
+class Simulation {
+ public:
+  explicit Simulation(const SceneDef& scene);
+  ~Simulation();
+  Simulation(const Simulation&) = delete;
+  Simulation& operator=(const Simulation&) = delete;
+
+  /// Advances one frame (solver.substeps substeps) and returns its metrics.
+  FrameMetrics step_frame();
+
+  const SceneDef& scene() const { return scene_; }
+  const ParticleStore& particles() const { return store_; }
+  const PassTimer& timer() const { return timer_; }
+  int frame() const { return frame_; }
+  double time() const { return time_; }
+
+  /// Names of the passes this scene's pipeline runs, in order.
+  std::vector<std::string> pipeline() const;
+
+ private:
+  struct Pass {
+    const char* name;
+    std::function<void(const StepContext&)> run;
+  };
+
+  void substep(StepContext& ctx);
+  void find_neighbors();
+  /// Reorders the store (new k = old order[k]) and remaps every index held elsewhere.
+  void reorder(std::span<const std::uint32_t> order);
+  FrameMetrics measure();
+
+  SceneDef scene_;
+  ParticleStore store_;
+  PassTimer timer_;
+  kernels::ParticleView view();
+
+  std::unique_ptr<Neighborhood> neighborhood_;  // null when no pass needs neighbors
+  std::unique_ptr<FluidSolver> fluid_;
+  std::unique_ptr<DistanceSolver> distance_;
+  std::unique_ptr<kernels::CollisionParams> collision_params_;
+  std::vector<kernels::CollisionShape> colliders_;
+  std::vector<Pass> begin_substep_passes_;  // reset per-substep state (XPBD lambdas)
+  std::vector<Pass> constraint_passes_;     // run every iteration, in order
+  std::vector<Pass> velocity_passes_;       // run after the velocity update
+  std::vector<std::function<void(std::span<const std::uint32_t>)>> index_remappers_;
+  int frame_ = 0;
+  double time_ = 0.0;
+};
+
+}  // namespace seiche

@@ -1,0 +1,40 @@
+// The raw distance constraints of a scene ("distance_constraints"): colored once at build time,
+// solved with XPBD every iteration, their particle indices remapped when the store is reordered.
+#pragma once
+
+#include <span>
+#include <vector>
+
+#include "seiche/frame_metrics.hpp"
+#include "seiche/kernels/distance_constraint.hpp"
+#include "seiche/kernels/particle_view.hpp"
+
+namespace seiche {
+
+class DistanceSolver {
+ public:
+  /// i, j are store indices at build time; rest_length < 0 means "the current distance".
+  DistanceSolver(std::span<const std::uint32_t> i, std::span<const std::uint32_t> j,
+                 std::span<const float> rest_length, std::span<const float> compliance,
+                 const kernels::ParticleView& particles);
+
+  std::size_t size() const { return constraints_.size(); }
+  std::size_t colors() const { return constraints_.color_start.size() - 1; }
+  void begin_substep() { std::fill(constraints_.lambda.begin(), constraints_.lambda.end(), 0.0f); }
+  void solve(const kernels::ParticleView& p, float dt) {
+    kernels::solve_distance_constraints(p, constraints_, dt);
+  }
+  void remap(std::span<const std::uint32_t> new_index) {
+    for (auto& k : constraints_.i) k = new_index[k];
+    for (auto& k : constraints_.j) k = new_index[k];
+  }
+  DistanceConstraintError measure(const kernels::ParticleView& p) const {
+    const auto e = kernels::distance_constraint_error(p, constraints_);
+    return {e.mean, e.max};
+  }
+
+ private:
+  kernels::DistanceConstraints constraints_;
+};
+
+}  // namespace seiche

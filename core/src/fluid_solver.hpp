@@ -1,0 +1,48 @@
+// The fluid material: Position Based Fluids over the fluid particles of the store, which the
+// neighbor stage has sorted to the front ([0, neighborhood.count())). Owns the packed
+// per-neighbor copies the kernels gather from and launches the kernels of kernels/.
+#pragma once
+
+#include <vector>
+
+#include "neighborhood.hpp"
+#include "seiche/frame_metrics.hpp"
+#include "seiche/kernels/pbf_density.hpp"
+#include "seiche/particle_store.hpp"
+#include "seiche/scene.hpp"
+
+namespace seiche {
+
+class FluidSolver {
+ public:
+  FluidSolver(const FluidDef& material, const SolverDef& solver, ParticleStore& store,
+              const Neighborhood& neighborhood);
+
+  float kernel_radius() const { return params_.h; }
+  float particle_mass() const { return params_.mass; }
+  float particle_radius() const { return particle_radius_; }
+  bool has_viscosity() const { return viscosity_ > 0.0f; }
+  bool has_vorticity() const { return vorticity_ > 0.0f; }
+
+  /// One Jacobi iteration of the density constraints on the predicted positions.
+  void solve_density();
+  void apply_vorticity_confinement(float dt);
+  void apply_viscosity();
+  /// Density error on the current positions x (end of a frame).
+  FluidError measure();
+
+ private:
+  void pack_positions(const float* x, const float* y, const float* z);
+  void pack_velocities_and_volumes();
+
+  ParticleStore& store_;
+  const Neighborhood& neighborhood_;
+  kernels::PbfParams params_;
+  float particle_radius_ = 0.0f;
+  float viscosity_ = 0.0f, vorticity_ = 0.0f;
+  std::vector<kernels::Float4> pos_;  // (x, y, z, lambda or volume)
+  std::vector<kernels::Float4> vel_;  // (vx, vy, vz, volume)
+  std::vector<float> omega_norm_;
+};
+
+}  // namespace seiche

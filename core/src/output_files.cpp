@@ -1,0 +1,90 @@
+#include "seiche/output_files.hpp"
+
+#include <bit>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <vector>
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <fmt/format.h>
+
+namespace seiche {
+
+namespace {
+
+[[noreturn]] void fail(const std::filesystem::path& path, const char* what, int err) {
+  throw IoError(fmt::format("{}: {}: {}", path.string(), what, std::strerror(err)));
+}
+
+}  // namespace
+
+void write_file_atomically(const std::filesystem::path& path, std::string_view bytes) {
+  const std::filesystem::path tmp =
+      path.parent_path() / fmt::format(".{}.tmp", path.filename().string());
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) fail(path, "cannot create file", errno);
+  std::size_t done = 0;
+  while (done < bytes.size()) {
+    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      const int err = errno;
+      ::close(fd);
+      ::unlink(tmp.c_str());
+      fail(path, "cannot write", err);
+    }
+    done += std::size_t(n);
+  }
+  if (::fsync(fd) != 0 || ::close(fd) != 0) {
+    const int err = errno;
+    ::unlink(tmp.c_str());
+    fail(path, "cannot flush to disk", err);
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    const int err = errno;
+    ::unlink(tmp.c_str());
+    fail(path, "cannot rename the finished file into place", err);
+  }
+}
+
+void prepare_output_directory(const std::filesystem::path& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw IoError(fmt::format("{}: cannot create output folder: {}", dir.string(), ec.message()));
+  if (::access(dir.c_str(), W_OK) != 0)
+    fail(dir, "output folder is not writable", errno);
+}
+
+std::string encode_particles_ply(const ParticleStore& s) {
+  const std::size_t n = s.size();
+  std::string out = fmt::format(
+      "ply\nformat binary_little_endian 1.0\ncomment written by seiche\nelement vertex {}\n"
+      "property float x\nproperty float y\nproperty float z\n"
+      "property float vx\nproperty float vy\nproperty float vz\n"
+      "property int id\nend_header\n",
+      n);
+  // Index of each id: the store is in cell order, exports are in id order.
+  std::vector<std::uint32_t> index_of_id(n);
+  for (std::size_t i = 0; i < n; ++i) index_of_id[std::size_t(s.id[i])] = std::uint32_t(i);
+  constexpr std::size_t kRecord = 6 * sizeof(float) + sizeof(std::int32_t);
+  const std::size_t header = out.size();
+  out.resize(header + n * kRecord);
+  char* dst = out.data() + header;
+  static_assert(std::endian::native == std::endian::little, "PLY writer assumes little-endian");
+  for (std::size_t k = 0; k < n; ++k, dst += kRecord) {
+    const std::uint32_t i = index_of_id[k];
+    const float v[6] = {s.x[i], s.y[i], s.z[i], s.vx[i], s.vy[i], s.vz[i]};
+    std::memcpy(dst, v, sizeof(v));
+    std::memcpy(dst + sizeof(v), &s.id[i], sizeof(std::int32_t));
+  }
+  return out;
+}
+
+std::string frame_file_name(std::string_view stem, int frame, std::string_view extension) {
+  return fmt::format("{}.{:04d}.{}", stem, frame, extension);
+}
+
+}  // namespace seiche

@@ -1,0 +1,46 @@
+#include "run_report.hpp"
+
+namespace seiche {
+
+RunReport::RunReport(const SceneDef& scene, std::size_t particles, int frames, int threads,
+                     const std::vector<std::string>& pipeline) {
+  doc_["seiche_version"] = SEICHE_VERSION;
+  doc_["scene"] = scene.name;
+  doc_["settings"] = {{"particles", particles},
+                      {"frames", frames},
+                      {"frame_dt", scene.solver.frame_dt},
+                      {"substeps", scene.solver.substeps},
+                      {"iterations", scene.solver.iterations},
+                      {"threads", threads}};
+  doc_["pipeline"] = pipeline;
+  doc_["frames"] = nlohmann::json::array();
+  doc_["status"] = "ok";
+}
+
+void RunReport::add_frame(const FrameMetrics& m, const PassTimer& timer) {
+  nlohmann::json f;
+  f["frame"] = m.frame;
+  f["time"] = m.time;
+  nlohmann::json pass_ms = nlohmann::json::object();
+  double wall = 0.0;
+  for (const auto& e : timer.entries()) {
+    pass_ms[e.name] = e.frame_seconds * 1e3;
+    wall += e.frame_seconds;
+  }
+  f["wall_ms"] = wall * 1e3;
+  f["pass_ms"] = pass_ms;
+  f["particles"] = m.particles;
+  if (m.fluid) f["fluid_density_error"] = {{"mean", m.fluid->mean}, {"max", m.fluid->max}};
+  if (m.distance) f["distance_error"] = {{"mean", m.distance->mean}, {"max", m.distance->max}};
+  f["kinetic_energy"] = m.kinetic_energy;
+  f["max_speed"] = m.max_speed;
+  f["non_finite"] = m.non_finite;
+  doc_["frames"].push_back(std::move(f));
+}
+
+void RunReport::set_error(const std::string& message) {
+  doc_["status"] = "error";
+  doc_["error"] = message;
+}
+
+}  // namespace seiche

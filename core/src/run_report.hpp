@@ -1,0 +1,29 @@
+// The JSON run report (`seiche run --report FILE`): the effective settings, then per frame the
+// wall time of every pass, the particle count, the error of each active constraint family,
+// kinetic energy, max speed and the count of non-finite values.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "seiche/frame_metrics.hpp"
+#include "seiche/pass_timer.hpp"
+#include "seiche/scene.hpp"
+
+namespace seiche {
+
+class RunReport {
+ public:
+  RunReport(const SceneDef& scene, std::size_t particles, int frames, int threads,
+            const std::vector<std::string>& pipeline);
+  void add_frame(const FrameMetrics& m, const PassTimer& timer);
+  void set_error(const std::string& message);
+  std::string dump() const { return doc_.dump(2) + "\n"; }
+
+ private:
+  nlohmann::json doc_;
+};
+
+}  // namespace seiche

@@ -1,0 +1,480 @@
+// Scene loading in three steps: parse the text (rejecting duplicate keys), apply the command-line
+// overrides to the JSON document, then read the document section by section into a SceneDef with
+// every value checked. Checks that need more than one value (a fluid box inside the domain, a
+// constraint index within "particles") run after all sections are read.
+// docs/scene-format.md documents every key; keep it in step with the readers below.
+#include "seiche/scene_loader.hpp"
+
+#include <algorithm>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <memory>
+#include <system_error>
+
+#include <fmt/format.h>
+
+#include "json_reader.hpp"
+
+namespace seiche {
+
+SceneError::SceneError(std::string file, std::string json_path, std::string problem)
+    : std::runtime_error(file + ": " + json_path + ": " + problem),
+      file_(std::move(file)),
+      json_path_(std::move(json_path)),
+      problem_(std::move(problem)) {}
+
+namespace {
+
+using detail::Json;
+using detail::JsonReader;
+using detail::Range;
+using detail::element_path;
+using detail::fail;
+using detail::member_path;
+
+constexpr double kMaxStepsPerFrame = 10000;      // substeps and iterations: more is a typo
+constexpr double kMaxParticlesPerFluid = 50e6;   // a larger block is a typo in spacing or box
+constexpr double kLatticeTolerance = 1e-4;       // of a spacing, absorbs rounding of box edges
+const std::string kCommandLine = "(command line)";
+
+std::string format_vec(const Vec3& v) { return fmt::format("[{}, {}, {}]", v[0], v[1], v[2]); }
+constexpr char kAxis[3] = {'x', 'y', 'z'};
+
+// ---- Step 1: parse ---------------------------------------------------------------------------
+
+// nlohmann keeps the last of two equal keys without a word; a scene with two "fluids" arrays is a
+// mistake, so a parser callback tracks the path and the keys seen in each open object.
+class DuplicateKeyCheck {
+ public:
+  explicit DuplicateKeyCheck(const std::string& file) : file_(&file) {}
+
+  bool operator()(int /*depth*/, Json::parse_event_t event, Json& parsed) {
+    switch (event) {
+      case Json::parse_event_t::object_start: open_.push_back({false, 0, {}, {}}); break;
+      case Json::parse_event_t::array_start: open_.push_back({true, 0, {}, {}}); break;
+      case Json::parse_event_t::key: {
+        Frame& top = open_.back();
+        top.key = parsed.get<std::string>();
+        if (std::find(top.seen.begin(), top.seen.end(), top.key) != top.seen.end())
+          fail(*file_, path(), "duplicate key; a key may appear only once per object");
+        top.seen.push_back(top.key);
+        break;
+      }
+      case Json::parse_event_t::object_end:
+      case Json::parse_event_t::array_end:
+        open_.pop_back();
+        next_element();
+        break;
+      case Json::parse_event_t::value: next_element(); break;
+    }
+    return true;
+  }
+
+ private:
+  struct Frame {
+    bool is_array;
+    std::size_t index;           // arrays: the element being parsed
+    std::string key;             // objects: the member being parsed
+    std::vector<std::string> seen;
+  };
+
+  void next_element() {
+    if (!open_.empty() && open_.back().is_array) ++open_.back().index;
+  }
+
+  std::string path() const {
+    std::string p;
+    for (const Frame& f : open_) p = f.is_array ? element_path(p, f.index) : member_path(p, f.key);
+    return p;
+  }
+
+  const std::string* file_;
+  std::vector<Frame> open_;
+};
+
+// "line 3, column 14" of the 0-based byte offset `pos` (clamped to the end of the text).
+std::string line_and_column(std::string_view text, std::size_t pos) {
+  pos = std::min(pos, text.size());
+  const auto before = text.substr(0, pos);
+  const std::size_t line = 1 + static_cast<std::size_t>(std::count(before.begin(), before.end(), '\n'));
+  const std::size_t line_start = before.rfind('\n');
+  const std::size_t column = line_start == std::string_view::npos ? pos + 1 : pos - line_start;
+  return fmt::format("line {}, column {}", line, column);
+}
+
+Json parse_json(std::string_view text, const std::string& file) {
+  try {
+    DuplicateKeyCheck check(file);
+    return Json::parse(text.begin(), text.end(), std::ref(check));
+  } catch (const Json::parse_error& e) {
+    // e.what() is "[json.exception.parse_error.101] parse error at line 4, column 0: <detail>".
+    // nlohmann counts a newline as the start of the next line, so "tru\n" would be reported on
+    // the line below the typo; recomputing from the byte offset names the line of the last read
+    // character (e.byte is 1-based).
+    const std::string message = e.what();
+    const auto at = message.find(": ", message.find("parse error"));
+    const std::string detail = at == std::string::npos ? message : message.substr(at + 2);
+    fail(file, "", fmt::format("malformed JSON at {}: {}", line_and_column(text, e.byte > 0 ? e.byte - 1 : 0), detail));
+  } catch (const Json::exception& e) {
+    // out_of_range.406 "number overflow parsing '1e400'" has no offset: find the literal.
+    std::string message = e.what();
+    const auto bracket = message.find("] ");
+    if (bracket != std::string::npos) message = message.substr(bracket + 2);
+    const auto open = message.find('\'');
+    const auto close = message.rfind('\'');
+    const auto pos = open < close ? text.find(std::string_view(message).substr(open + 1, close - open - 1))
+                                  : std::string_view::npos;
+    fail(file, "",
+         pos == std::string_view::npos ? fmt::format("malformed JSON: {}", message)
+                                       : fmt::format("malformed JSON at {}: {}", line_and_column(text, pos), message));
+  }
+}
+
+// ---- Step 2: overrides -----------------------------------------------------------------------
+
+struct PathStep {
+  std::string key;                   // an object member, or
+  std::optional<std::size_t> index;  // an array element
+};
+
+// "fluids[0].box.min", "fluids.0.box.min" -> fluids, [0], box, min. A segment of digits after a
+// dot is an index: no key of the scene format is a number.
+std::vector<PathStep> parse_override_key(const std::string& key, const std::string& override_text) {
+  const auto malformed = [&](std::string_view why) {
+    fail(kCommandLine, key, fmt::format("malformed override \"{}\": {}", override_text, why));
+  };
+  const auto parse_index = [&](std::string_view digits) {
+    std::size_t index = 0;
+    const auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), index);
+    if (digits.empty() || ec != std::errc() || end != digits.data() + digits.size())
+      malformed(fmt::format("\"{}\" is not an array index", digits));
+    return index;
+  };
+
+  std::vector<PathStep> steps;
+  std::size_t i = 0;
+  while (i < key.size()) {
+    if (key[i] == '[') {
+      if (steps.empty()) malformed("the key must start with a name");
+      const auto close = key.find(']', i);
+      if (close == std::string::npos) malformed("'[' without ']'");
+      steps.push_back({{}, parse_index(std::string_view(key).substr(i + 1, close - i - 1))});
+      i = close + 1;
+    } else {
+      const auto end = std::min(key.find_first_of(".[", i), key.size());
+      const std::string_view name = std::string_view(key).substr(i, end - i);
+      if (name.empty()) malformed("empty name in the key");
+      const bool digits = std::all_of(name.begin(), name.end(), [](char c) { return c >= '0' && c <= '9'; });
+      if (digits && steps.empty()) malformed("the key must start with a name");
+      steps.push_back(digits ? PathStep{{}, parse_index(name)} : PathStep{std::string(name), {}});
+      i = end;
+    }
+    if (i < key.size() && key[i] == '.') {
+      ++i;
+      if (i == key.size() || key[i] == '[' || key[i] == '.') malformed("a '.' must be followed by a name or index");
+    } else if (i < key.size() && key[i] != '[') {
+      malformed(fmt::format("unexpected '{}'", key[i]));
+    }
+  }
+  if (steps.empty()) malformed("empty key");
+  return steps;
+}
+
+// Sets one value, creating missing objects on the way; an array index must exist already. The
+// value is then read and checked like any other, so a mistyped key fails as an unknown key.
+void apply_override(Json& root, const std::string& override_text) {
+  const auto eq = override_text.find('=');
+  if (eq == std::string::npos)
+    fail(kCommandLine, override_text, fmt::format("malformed override \"{}\": expected KEY=VALUE", override_text));
+  const std::string key = override_text.substr(0, eq);
+  const std::string value_text = override_text.substr(eq + 1);
+  const std::vector<PathStep> steps = parse_override_key(key, override_text);
+
+  Json value = Json::parse(value_text, nullptr, /*allow_exceptions=*/false);
+  if (value.is_discarded()) value = value_text;  // not JSON: a plain string
+
+  Json* node = &root;
+  std::string path;
+  for (std::size_t s = 0; s < steps.size(); ++s) {
+    const PathStep& step = steps[s];
+    const bool last = s + 1 == steps.size();
+    if (step.index) {
+      const std::size_t index = *step.index;
+      if (!node->is_array())
+        fail(kCommandLine, path, fmt::format("is {}, not an array; cannot set element {} (override \"{}\")",
+                                             detail::describe_value(*node), index, override_text));
+      if (index >= node->size())
+        fail(kCommandLine, element_path(path, index),
+             fmt::format("index {} is past the end of {} ({} {}; override \"{}\")", index,
+                         detail::display_path(path), node->size(), node->size() == 1 ? "entry" : "entries",
+                         override_text));
+      node = &(*node)[index];
+      path = element_path(path, index);
+    } else {
+      if (!node->is_object())
+        fail(kCommandLine, path, fmt::format("is {}, not an object; cannot set \"{}\" (override \"{}\")",
+                                             detail::describe_value(*node), step.key, override_text));
+      if (!node->contains(step.key)) {
+        if (!last && steps[s + 1].index)
+          fail(kCommandLine, element_path(member_path(path, step.key), *steps[s + 1].index),
+               fmt::format("index {} is past the end: {} is absent (override \"{}\")", *steps[s + 1].index,
+                           member_path(path, step.key), override_text));
+        (*node)[step.key] = Json::object();
+      }
+      node = &(*node)[step.key];
+      path = member_path(path, step.key);
+    }
+    if (last) *node = value;
+  }
+}
+
+// ---- Step 3: read the sections ---------------------------------------------------------------
+
+SolverDef read_solver(JsonReader r) {
+  SolverDef s;
+  r.read("frame_dt", s.frame_dt, Range::above(0));
+  r.read("substeps", s.substeps, Range::closed(1, kMaxStepsPerFrame));
+  r.read("iterations", s.iterations, Range::closed(1, kMaxStepsPerFrame));
+  r.read("gravity", s.gravity);
+  r.read("relaxation", s.relaxation, Range::at_least(0));
+  r.read("tensile_k", s.tensile_k, Range::at_least(0));
+  r.read("tensile_n", s.tensile_n, Range::closed(1, 8));
+  r.read("tensile_dq", s.tensile_dq, Range::open(0, 1));
+  r.finish();
+  return s;
+}
+
+DomainDef read_domain(JsonReader r) {
+  DomainDef d;
+  r.read("min", d.min);
+  r.read("max", d.max);
+  r.read("friction", d.friction, Range::at_least(0));
+  r.finish();
+  for (int a = 0; a < 3; ++a) {
+    if (!(d.min[a] < d.max[a]))
+      r.fail_here(fmt::format("min must be < max on every axis, but along {} min = {} and max = {}", kAxis[a],
+                              d.min[a], d.max[a]));
+  }
+  return d;
+}
+
+OutputDef read_output(JsonReader r) {
+  OutputDef o;
+  r.read("frames", o.frames, Range::at_least(1));
+  r.finish();
+  return o;
+}
+
+BoxDef read_box(JsonReader r) {
+  BoxDef b;
+  r.read("min", b.min);
+  r.read("max", b.max);
+  r.finish();
+  for (int a = 0; a < 3; ++a) {
+    if (b.min[a] > b.max[a])
+      r.fail_here(fmt::format("min > max along {} ({} > {})", kAxis[a], b.min[a], b.max[a]));
+  }
+  return b;
+}
+
+FluidDef read_fluid(JsonReader r) {
+  FluidDef f;
+  r.read("spacing", f.spacing, Range::above(0));
+  r.read("kernel_radius", f.kernel_radius, Range::at_least(1));
+  r.read("rest_density", f.rest_density, Range::above(0));
+  r.read("viscosity", f.viscosity, Range::closed(0, 1));
+  r.read("vorticity", f.vorticity, Range::at_least(0));
+  r.read("velocity", f.velocity);
+  f.box = read_box(r.object("box"));  // required keys last: see JsonReader::require
+  r.finish();
+  return f;
+}
+
+ParticleDef read_particle(JsonReader r) {
+  ParticleDef p;
+  r.read("v", p.v);
+  r.read("mass", p.mass, Range::at_least(0));
+  r.require("x");
+  r.read("x", p.x);
+  r.finish();
+  return p;
+}
+
+DistanceConstraintDef read_distance_constraint(JsonReader r) {
+  DistanceConstraintDef c;
+  r.read("rest_length", c.rest_length, Range::at_least(0));  // absent: the initial distance (-1)
+  r.read("compliance", c.compliance, Range::at_least(0));
+  r.require("i");
+  r.require("j");
+  r.read("i", c.i);  // the range is checked against "particles" once all sections are read
+  r.read("j", c.j);
+  r.finish();
+  return c;
+}
+
+ColliderDef read_collider(JsonReader r) {
+  ColliderDef c;
+  r.read("friction", c.friction, Range::at_least(0));
+  auto plane = r.optional_object("plane");
+  auto box = r.optional_object("box");
+  auto sphere = r.optional_object("sphere");
+  r.finish();
+
+  const int shapes = int(plane.has_value()) + int(box.has_value()) + int(sphere.has_value());
+  if (shapes != 1)
+    r.fail_here(shapes == 0 ? "needs a shape: one of \"plane\", \"box\", \"sphere\""
+                            : "has more than one of \"plane\", \"box\", \"sphere\"; a collider has exactly one shape");
+  if (plane) {
+    c.shape = ColliderDef::Shape::Plane;
+    plane->read("point", c.point);
+    plane->read("normal", c.normal);
+    plane->finish();
+    const double length = std::sqrt(double(c.normal[0]) * c.normal[0] + double(c.normal[1]) * c.normal[1] +
+                                    double(c.normal[2]) * c.normal[2]);
+    if (!(length > 0)) plane->fail_at("normal", "must not be zero (it is normalized on load)");
+    for (float& n : c.normal) n = static_cast<float>(n / length);
+  } else if (box) {
+    c.shape = ColliderDef::Shape::Box;
+    c.box = read_box(*box);
+  } else {
+    c.shape = ColliderDef::Shape::Sphere;
+    sphere->read("center", c.center);
+    sphere->require("radius");
+    sphere->read("radius", c.radius, Range::above(0));
+    sphere->finish();
+  }
+  return c;
+}
+
+// ---- Checks across sections ------------------------------------------------------------------
+
+bool inside(const Vec3& p, const DomainDef& d) {
+  for (int a = 0; a < 3; ++a)
+    if (p[a] < d.min[a] || p[a] > d.max[a]) return false;
+  return true;
+}
+
+void check_fluids(const SceneDef& scene, const std::string& file) {
+  const std::string domain = fmt::format("{}..{}", format_vec(scene.domain.min), format_vec(scene.domain.max));
+  for (std::size_t k = 0; k < scene.fluids.size(); ++k) {
+    const FluidDef& f = scene.fluids[k];
+    const std::string path = element_path("fluids", k);
+    const std::string box_path = path + ".box";
+
+    // Lattice sites sit at (i + 0.5) * spacing from box.min, floor(extent / spacing) per axis.
+    double count = 1;
+    for (int a = 0; a < 3; ++a) {
+      const double extent = double(f.box.max[a]) - double(f.box.min[a]);
+      const double n = std::floor(extent / f.spacing + kLatticeTolerance);
+      if (n < 1)
+        fail(file, box_path, fmt::format("holds no particles: along {} it is {} m thick, less than one spacing ({} m)",
+                                         kAxis[a], static_cast<float>(extent), f.spacing));
+      count *= n;
+    }
+    if (count > kMaxParticlesPerFluid)
+      fail(file, box_path, fmt::format("would hold {:.0f} particles at spacing {} m; the limit is {:.0f} per block",
+                                       count, f.spacing, kMaxParticlesPerFluid));
+    if (!inside(f.box.min, scene.domain) || !inside(f.box.max, scene.domain))
+      fail(file, box_path, fmt::format("{}..{} reaches outside the domain {}", format_vec(f.box.min),
+                                       format_vec(f.box.max), domain));
+
+    // One material per scene: the solver keeps a single kernel radius and rest density.
+    const FluidDef& first = scene.fluids.front();
+    const auto same = [&](const char* key, float mine, float theirs) {
+      if (mine != theirs)
+        fail(file, path + "." + key,
+             fmt::format("{} differs from fluids[0] ({}); all fluids of a scene share one material", mine, theirs));
+    };
+    same("spacing", f.spacing, first.spacing);
+    same("kernel_radius", f.kernel_radius, first.kernel_radius);
+    same("rest_density", f.rest_density, first.rest_density);
+    same("viscosity", f.viscosity, first.viscosity);
+    same("vorticity", f.vorticity, first.vorticity);
+  }
+}
+
+void check_particles(const SceneDef& scene, const std::string& file) {
+  for (std::size_t k = 0; k < scene.particles.size(); ++k) {
+    const Vec3& x = scene.particles[k].x;
+    if (!inside(x, scene.domain))
+      fail(file, element_path("particles", k) + ".x",
+           fmt::format("{} is outside the domain {}..{}", format_vec(x), format_vec(scene.domain.min),
+                       format_vec(scene.domain.max)));
+  }
+}
+
+void check_distance_constraints(const SceneDef& scene, const std::string& file) {
+  const auto n = static_cast<long long>(scene.particles.size());
+  const std::string valid = n == 0 ? "\"particles\" is empty" : fmt::format("valid: 0..{}", n - 1);
+  for (std::size_t k = 0; k < scene.distance_constraints.size(); ++k) {
+    const DistanceConstraintDef& c = scene.distance_constraints[k];
+    const std::string path = element_path("distance_constraints", k);
+    for (const auto& [key, index] : {std::pair{".i", c.i}, std::pair{".j", c.j}}) {
+      if (index < 0 || index >= n)
+        fail(file, path + key, fmt::format("particle index {} is out of range ({})", index, valid));
+    }
+    if (c.i == c.j)
+      fail(file, path + ".j", fmt::format("equals i ({}); a constraint needs two different particles", c.i));
+  }
+}
+
+SceneDef read_scene(const Json& document, const std::string& file, const std::string& default_name) {
+  JsonReader root(document, "", file);
+  SceneDef scene;
+  scene.name = default_name;
+  root.read("name", scene.name);
+  if (scene.name.empty()) root.fail_at("name", "must not be empty");
+  if (auto r = root.optional_object("solver")) scene.solver = read_solver(*r);
+  if (auto r = root.optional_object("domain")) scene.domain = read_domain(*r);
+  if (auto r = root.optional_object("output")) scene.output = read_output(*r);
+  for (const JsonReader& r : root.objects("fluids")) scene.fluids.push_back(read_fluid(r));
+  for (const JsonReader& r : root.objects("particles")) scene.particles.push_back(read_particle(r));
+  for (const JsonReader& r : root.objects("distance_constraints"))
+    scene.distance_constraints.push_back(read_distance_constraint(r));
+  for (const JsonReader& r : root.objects("colliders")) scene.colliders.push_back(read_collider(r));
+  root.finish();
+
+  check_fluids(scene, file);
+  check_particles(scene, file);
+  check_distance_constraints(scene, file);
+  return scene;
+}
+
+SceneDef load_scene(std::string_view text, const std::string& file, std::span<const std::string> overrides,
+                    const std::string& default_name) {
+  Json document = parse_json(text, file);
+  if (!document.is_object())
+    fail(file, "", "expected a JSON object at the top, got " + detail::describe_value(document));
+  for (const std::string& o : overrides) apply_override(document, o);
+  return read_scene(document, file, default_name);
+}
+
+std::string read_file(const std::filesystem::path& path, const std::string& file) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) fail(file, "(file)", "cannot open: it is a directory");
+  const std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(path.c_str(), "rb"), &std::fclose);
+  if (!f) fail(file, "(file)", "cannot open: " + std::generic_category().message(errno));
+  std::string text;
+  char buffer[1 << 16];
+  std::size_t n = 0;
+  while ((n = std::fread(buffer, 1, sizeof buffer, f.get())) > 0) text.append(buffer, n);
+  if (std::ferror(f.get())) fail(file, "(file)", "cannot read: " + std::generic_category().message(errno));
+  return text;
+}
+
+}  // namespace
+
+SceneDef load_scene_text(std::string_view json_text, std::string_view source,
+                         std::span<const std::string> overrides) {
+  return load_scene(json_text, std::string(source), overrides, SceneDef{}.name);
+}
+
+SceneDef load_scene_file(const std::filesystem::path& file, std::span<const std::string> overrides) {
+  const std::string source = file.string();
+  return load_scene(read_file(file, source), source, overrides, file.stem().string());
+}
+
+}  // namespace seiche

@@ -1,0 +1,245 @@
+#include "seiche/simulation.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "blocked_reduce.hpp"
+#include "distance_solver.hpp"
+#include "fluid_solver.hpp"
+#include "neighborhood.hpp"
+#include "seiche/kernels/collisions.hpp"
+#include "seiche/kernels/integrate.hpp"
+#include "seiche/kernels/particle_view.hpp"
+
+namespace seiche {
+
+namespace {
+
+// Lattice points of a fluid block: (i + 0.5) spacing from box.min along each axis.
+std::array<std::size_t, 3> lattice_counts(const FluidDef& f) {
+  std::array<std::size_t, 3> n{};
+  for (int a = 0; a < 3; ++a) {
+    const double extent = double(f.box.max[a]) - f.box.min[a];
+    n[a] = std::size_t(std::max(0.0, std::floor(extent / f.spacing + 1e-4)));
+  }
+  return n;
+}
+
+kernels::CollisionShape to_shape(const ColliderDef& c) {
+  kernels::CollisionShape s;
+  s.friction = c.friction;
+  switch (c.shape) {
+    case ColliderDef::Shape::Plane:
+      s.kind = kernels::CollisionShape::Kind::Plane;
+      std::copy(c.point.begin(), c.point.end(), s.a);
+      std::copy(c.normal.begin(), c.normal.end(), s.b);
+      break;
+    case ColliderDef::Shape::Box:
+      s.kind = kernels::CollisionShape::Kind::Box;
+      std::copy(c.box.min.begin(), c.box.min.end(), s.a);
+      std::copy(c.box.max.begin(), c.box.max.end(), s.b);
+      break;
+    case ColliderDef::Shape::Sphere:
+      s.kind = kernels::CollisionShape::Kind::Sphere;
+      std::copy(c.center.begin(), c.center.end(), s.a);
+      s.radius = c.radius;
+      break;
+  }
+  return s;
+}
+
+}  // namespace
+
+Simulation::Simulation(const SceneDef& scene) : scene_(scene) {
+  // ---- Particles: raw particles first (their index is the scene's index), then fluid blocks.
+  std::size_t fluid_count = 0;
+  for (const FluidDef& f : scene_.fluids) {
+    const auto n = lattice_counts(f);
+    fluid_count += n[0] * n[1] * n[2];
+  }
+  const std::size_t raw_count = scene_.particles.size();
+  store_.resize(raw_count + fluid_count);
+  for (std::size_t k = 0; k < raw_count; ++k) {
+    const ParticleDef& p = scene_.particles[k];
+    store_.x[k] = p.x[0], store_.y[k] = p.x[1], store_.z[k] = p.x[2];
+    store_.vx[k] = p.v[0], store_.vy[k] = p.v[1], store_.vz[k] = p.v[2];
+    store_.w[k] = p.mass > 0.0f ? 1.0f / p.mass : 0.0f;
+    store_.phase[k] = make_phase(Material::Free);
+  }
+  if (!scene_.fluids.empty()) {
+    neighborhood_ = std::make_unique<Neighborhood>();
+    fluid_ = std::make_unique<FluidSolver>(scene_.fluids[0], scene_.solver, store_, *neighborhood_);
+    neighborhood_->radius = fluid_->kernel_radius();
+    std::size_t k = raw_count;
+    for (std::size_t b = 0; b < scene_.fluids.size(); ++b) {
+      const FluidDef& f = scene_.fluids[b];
+      const auto n = lattice_counts(f);
+      for (std::size_t iz = 0; iz < n[2]; ++iz)
+        for (std::size_t iy = 0; iy < n[1]; ++iy)
+          for (std::size_t ix = 0; ix < n[0]; ++ix, ++k) {
+            store_.x[k] = f.box.min[0] + (float(ix) + 0.5f) * f.spacing;
+            store_.y[k] = f.box.min[1] + (float(iy) + 0.5f) * f.spacing;
+            store_.z[k] = f.box.min[2] + (float(iz) + 0.5f) * f.spacing;
+            store_.vx[k] = f.velocity[0], store_.vy[k] = f.velocity[1], store_.vz[k] = f.velocity[2];
+            store_.w[k] = 1.0f / fluid_->particle_mass();
+            store_.phase[k] = make_phase(Material::Fluid, std::uint32_t(b));
+          }
+    }
+    // The grid covers the domain (grown by one cell); particles outside clamp to border cells.
+    const float h = neighborhood_->radius;
+    float lo[3], hi[3];
+    for (int a = 0; a < 3; ++a) lo[a] = scene_.domain.min[a] - h, hi[a] = scene_.domain.max[a] + h;
+    neighborhood_->spec = neighbor::make_grid_spec(lo, hi, h, std::max<std::size_t>(4 * fluid_count, 1 << 16));
+  }
+  for (std::size_t k = 0; k < store_.size(); ++k) {
+    store_.id[k] = std::int32_t(k);
+    store_.px[k] = store_.x[k], store_.py[k] = store_.y[k], store_.pz[k] = store_.z[k];
+  }
+
+  // ---- Raw distance constraints.
+  if (!scene_.distance_constraints.empty()) {
+    std::vector<std::uint32_t> ci, cj;
+    std::vector<float> rest, compliance;
+    for (const DistanceConstraintDef& d : scene_.distance_constraints) {
+      ci.push_back(std::uint32_t(d.i));
+      cj.push_back(std::uint32_t(d.j));
+      rest.push_back(d.rest_length);
+      compliance.push_back(d.compliance);
+    }
+    distance_ = std::make_unique<DistanceSolver>(ci, cj, rest, compliance, view());
+    index_remappers_.push_back([this](std::span<const std::uint32_t> m) { distance_->remap(m); });
+  }
+
+  // ---- Collisions: the domain always, plus the scene's colliders.
+  collision_params_ = std::make_unique<kernels::CollisionParams>();
+  for (int a = 0; a < 3; ++a) {
+    collision_params_->domain_min[a] = scene_.domain.min[a];
+    collision_params_->domain_max[a] = scene_.domain.max[a];
+  }
+  collision_params_->domain_friction = scene_.domain.friction;
+  collision_params_->fluid_radius = fluid_ ? fluid_->particle_radius() : 0.0f;
+  for (const ColliderDef& c : scene_.colliders) colliders_.push_back(to_shape(c));
+
+  // ---- The pipeline: only what this scene needs.
+  if (distance_) {
+    begin_substep_passes_.push_back({"distance", [this](const StepContext&) { distance_->begin_substep(); }});
+  }
+  if (fluid_) {
+    constraint_passes_.push_back({"fluid density", [this](const StepContext&) { fluid_->solve_density(); }});
+  }
+  if (distance_) {
+    constraint_passes_.push_back({"distance", [this](const StepContext& c) { distance_->solve(view(), c.dt); }});
+  }
+  constraint_passes_.push_back({"collisions", [this](const StepContext&) {
+                                  kernels::solve_collisions(view(), *collision_params_, colliders_);
+                                }});
+  if (fluid_ && fluid_->has_vorticity()) {
+    velocity_passes_.push_back({"vorticity", [this](const StepContext& c) { fluid_->apply_vorticity_confinement(c.dt); }});
+  }
+  if (fluid_ && fluid_->has_viscosity()) {
+    velocity_passes_.push_back({"viscosity", [this](const StepContext&) { fluid_->apply_viscosity(); }});
+  }
+}
+
+Simulation::~Simulation() = default;
+
+kernels::ParticleView Simulation::view() {
+  kernels::ParticleView v;
+  v.n = store_.size();
+  v.x = store_.x.data(), v.y = store_.y.data(), v.z = store_.z.data();
+  v.px = store_.px.data(), v.py = store_.py.data(), v.pz = store_.pz.data();
+  v.vx = store_.vx.data(), v.vy = store_.vy.data(), v.vz = store_.vz.data();
+  v.w = store_.w.data();
+  v.phase = store_.phase.data();
+  return v;
+}
+
+std::vector<std::string> Simulation::pipeline() const {
+  std::vector<std::string> names{"predict"};
+  if (neighborhood_) names.push_back("neighbors");
+  for (const Pass& p : constraint_passes_) names.push_back(p.name);
+  names.push_back("update");
+  for (const Pass& p : velocity_passes_) names.push_back(p.name);
+  return names;
+}
+
+FrameMetrics Simulation::step_frame() {
+  timer_.begin_frame();
+  StepContext ctx;
+  ctx.dt = float(scene_.solver.frame_dt / scene_.solver.substeps);
+  for (ctx.substep = 0; ctx.substep < scene_.solver.substeps; ++ctx.substep) substep(ctx);
+  ++frame_;
+  time_ = frame_ * scene_.solver.frame_dt;
+  FrameMetrics m;
+  timer_.time("metrics", [&] { m = measure(); });
+  return m;
+}
+
+void Simulation::substep(StepContext& ctx) {
+  const float* g = scene_.solver.gravity.data();
+  timer_.time("predict", [&] { kernels::predict_positions(view(), ctx.dt, g); });
+  if (neighborhood_) timer_.time("neighbors", [&] { find_neighbors(); });
+  for (const Pass& p : begin_substep_passes_) p.run(ctx);
+  for (ctx.iteration = 0; ctx.iteration < scene_.solver.iterations; ++ctx.iteration)
+    for (const Pass& p : constraint_passes_) timer_.time(p.name, [&] { p.run(ctx); });
+  timer_.time("update", [&] { kernels::update_velocities(view(), ctx.dt); });
+  for (const Pass& p : velocity_passes_) timer_.time(p.name, [&] { p.run(ctx); });
+}
+
+void Simulation::find_neighbors() {
+  Neighborhood& nb = *neighborhood_;
+  const std::size_t n = store_.size();
+  nb.in_grid.resize(n);
+  for (std::size_t i = 0; i < n; ++i)
+    nb.in_grid[i] = phase_material(store_.phase[i]) == Material::Fluid ? 1 : 0;
+  nb.grid.build(nb.spec, store_.px.data(), store_.py.data(), store_.pz.data(), nb.in_grid.data(), n);
+  reorder(nb.grid.order());
+  neighbor::build_neighbor_list(nb.grid, store_.px.data(), store_.py.data(), store_.pz.data(),
+                                n, nb.radius, nb.list);
+}
+
+void Simulation::reorder(std::span<const std::uint32_t> order) {
+  store_.reorder(order);
+  if (index_remappers_.empty()) return;
+  const std::vector<std::uint32_t> new_index = inverse_permutation(order);
+  for (auto& remap : index_remappers_) remap(new_index);
+}
+
+FrameMetrics Simulation::measure() {
+  FrameMetrics m;
+  m.frame = frame_;
+  m.time = time_;
+  m.particles = store_.size();
+  struct Health {
+    double kinetic = 0.0, max_speed2 = 0.0;
+    std::size_t non_finite = 0;
+  };
+  const Health h = blocked_reduce(
+      store_.size(), Health{},
+      [&](std::size_t b, std::size_t e) {
+        Health part;
+        for (std::size_t i = b; i < e; ++i) {
+          const float values[6] = {store_.x[i], store_.y[i], store_.z[i],
+                                   store_.vx[i], store_.vy[i], store_.vz[i]};
+          for (float v : values) part.non_finite += std::isfinite(v) ? 0 : 1;
+          const double v2 = double(store_.vx[i]) * store_.vx[i] + double(store_.vy[i]) * store_.vy[i] +
+                            double(store_.vz[i]) * store_.vz[i];
+          if (store_.w[i] > 0.0f) part.kinetic += 0.5 * v2 / store_.w[i];
+          part.max_speed2 = std::max(part.max_speed2, v2);
+        }
+        return part;
+      },
+      [](Health& acc, const Health& p) {
+        acc.kinetic += p.kinetic;
+        acc.max_speed2 = std::max(acc.max_speed2, p.max_speed2);
+        acc.non_finite += p.non_finite;
+      });
+  m.kinetic_energy = h.kinetic;
+  m.max_speed = std::sqrt(h.max_speed2);
+  m.non_finite = h.non_finite;
+  if (fluid_) m.fluid = fluid_->measure();
+  if (distance_) m.distance = distance_->measure(view());
+  return m;
+}
+
+}  // namespace seiche

@@ -1,0 +1,61 @@
+// Position Based Fluids density constraint (Macklin & Müller 2013), one Jacobi iteration in two
+// passes over the fluid particles (sorted by cell; neighbors from a CSR list, self excluded).
+//
+// With V = m / rho0 the rest volume of a particle and W, grad W the kernels of sph_kernels.hpp:
+//   density      rho_i = m (W(0) + sum_j W(|p_i - p_j|))
+//   constraint   C_i = max(rho_i / rho0 - 1, 0)           (unilateral: no pull at free surfaces)
+//   gradients    grad_{p_i} C_i = V sum_j grad W_ij,       grad_{p_j} C_i = -V grad W_ij
+//   lambda       lambda_i = -C_i / (sum_k |grad_{p_k} C_i|^2 + eps)
+//   correction   dp_i = V sum_j (lambda_i + lambda_j + s_corr_ij) grad W_ij
+//   s_corr_ij = -k (W(|p_i - p_j|) / W(dq))^n / D0            (artificial pressure, eq. 13)
+// eps (constraint force mixing) softens the constraint and keeps the division finite where a
+// particle has no neighbor. D0 is the lambda denominator of a particle in a full rest lattice:
+// dividing by it makes s_corr a multiplier like lambda (m^2 here), so k reads as "the
+// compression this repulsion is worth at r = dq h" and does not depend on the resolution.
+//
+// Pass 1 reads packed positions (x, y, z, -) and writes density and lambda; pass 2 reads packed
+// positions with lambda in w and adds dp_i to the predicted positions px, py, pz (which are not
+// read by either pass, so the iteration is a true Jacobi step). Vectorized across the
+// neighbors of one particle (lane = neighbor, gathered), parallel across particles; every
+// particle's sums run in a fixed order, so results do not depend on the thread count.
+#pragma once
+
+#include <cstddef>
+
+#include "seiche/kernels/particle_view.hpp"
+#include "seiche/kernels/sph_kernels.hpp"
+
+namespace seiche::kernels {
+
+struct PbfParams {
+  float h = 0.04f;           ///< kernel radius (m)
+  float mass = 0.008f;       ///< particle mass (kg)
+  float rest_density = 1000.0f;
+  float epsilon = 0.0f;      ///< absolute constraint force mixing term (1/m^2)
+  float lambda_scale = 1.0f; ///< 1 / D0 (m^2): the unit of s_corr
+  float tensile_k = 0.0f;    ///< 0 = no artificial pressure
+  int tensile_n = 4;
+  float tensile_dq = 0.2f;   ///< fraction of h
+};
+
+/// The sum over an ideal lattice of spacing s of W(|k s|) (self included), for the particle mass
+/// that makes a lattice exactly rest density: mass = rest_density / lattice_kernel_sum.
+double lattice_kernel_sum(float spacing, float h);
+/// The lambda denominator sum_k |grad C|^2 of a particle inside that lattice (with V = m/rho0):
+/// the scale against which the relaxation epsilon is given.
+double lattice_lambda_denominator(float spacing, float h);
+
+/// Pass 1 over particles [0, n): density[i], lambda[i].
+void pbf_density_lambda(const Float4* pos, NeighborSpan nbr, std::size_t n, const PbfParams& prm,
+                        float* density, float* lambda);
+/// Pass 2 over particles [0, n): px/py/pz[i] += dp_i. pos_lambda holds (x, y, z, lambda).
+void pbf_apply_correction(const Float4* pos_lambda, NeighborSpan nbr, std::size_t n,
+                          const PbfParams& prm, float* px, float* py, float* pz);
+
+/// Scalar references of both passes (the oracle of the vectorized ones; tests only).
+void pbf_density_lambda_reference(const Float4* pos, NeighborSpan nbr, std::size_t n,
+                                  const PbfParams& prm, float* density, float* lambda);
+void pbf_apply_correction_reference(const Float4* pos_lambda, NeighborSpan nbr, std::size_t n,
+                                    const PbfParams& prm, float* px, float* py, float* pz);
+
+}  // namespace seiche::kernels

@@ -1,0 +1,19 @@
+// The phase word of a particle: its material in the low 8 bits and its object (group) index in
+// the high 24 bits. Shared by the kernels (which branch on material) and the host.
+#pragma once
+
+#include <cstdint>
+
+namespace seiche {
+
+enum class Material : std::uint8_t {
+  Free = 0,   ///< a raw particle: constraints and colliders only
+  Fluid = 1,  ///< Position Based Fluids
+};
+
+constexpr std::uint32_t make_phase(Material m, std::uint32_t group = 0) {
+  return std::uint32_t(m) | (group << 8);
+}
+constexpr Material phase_material(std::uint32_t phase) { return Material(phase & 0xffu); }
+
+}  // namespace seiche

@@ -1,0 +1,111 @@
+#include "seiche/kernels/collisions.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <tbb/parallel_for.h>
+
+#include "seiche/kernels/phase.hpp"
+
+namespace seiche::kernels {
+
+namespace {
+
+struct Point {
+  float x, y, z;
+};
+
+// Push p out by depth along unit normal n, then apply friction to the substep's motion.
+inline void resolve_contact(Point& p, const Point& x, const float n[3], float depth, float mu) {
+  p.x += depth * n[0];
+  p.y += depth * n[1];
+  p.z += depth * n[2];
+  if (mu <= 0.0f) return;
+  const float dx = p.x - x.x, dy = p.y - x.y, dz = p.z - x.z;
+  const float dn = dx * n[0] + dy * n[1] + dz * n[2];
+  const float tx = dx - dn * n[0], ty = dy - dn * n[1], tz = dz - dn * n[2];
+  const float t_len = std::sqrt(tx * tx + ty * ty + tz * tz);
+  if (t_len <= 0.0f) return;
+  const float keep = t_len <= mu * depth ? 1.0f : mu * depth / t_len;
+  p.x -= keep * tx;
+  p.y -= keep * ty;
+  p.z -= keep * tz;
+}
+
+inline void collide_domain(Point& p, const Point& x, const CollisionParams& c, float r) {
+  float* pc[3] = {&p.x, &p.y, &p.z};
+  for (int axis = 0; axis < 3; ++axis) {
+    const float lo = c.domain_min[axis] + r;
+    const float hi = std::max(c.domain_max[axis] - r, lo);
+    float n[3] = {0, 0, 0};
+    const float v = *pc[axis];
+    if (v < lo) {
+      n[axis] = 1.0f;
+      resolve_contact(p, x, n, lo - v, c.domain_friction);
+      *pc[axis] = lo;  // exact, whatever rounding the push did
+    } else if (v > hi) {
+      n[axis] = -1.0f;
+      resolve_contact(p, x, n, v - hi, c.domain_friction);
+      *pc[axis] = hi;
+    }  // a NaN fails both tests and stays NaN: the run's finite check must see it, not a wall
+  }
+}
+
+inline void collide_shape(Point& p, const Point& x, const CollisionShape& s, float r) {
+  switch (s.kind) {
+    case CollisionShape::Kind::Plane: {
+      const float d = (p.x - s.a[0]) * s.b[0] + (p.y - s.a[1]) * s.b[1] + (p.z - s.a[2]) * s.b[2] - r;
+      if (d < 0.0f) resolve_contact(p, x, s.b, -d, s.friction);
+      break;
+    }
+    case CollisionShape::Kind::Sphere: {
+      const float dx = p.x - s.a[0], dy = p.y - s.a[1], dz = p.z - s.a[2];
+      const float len = std::sqrt(dx * dx + dy * dy + dz * dz);
+      const float depth = s.radius + r - len;
+      if (depth <= 0.0f) break;
+      float n[3] = {0.0f, 1.0f, 0.0f};  // at the exact center: push up
+      if (len > 1e-12f) n[0] = dx / len, n[1] = dy / len, n[2] = dz / len;
+      resolve_contact(p, x, n, depth, s.friction);
+      break;
+    }
+    case CollisionShape::Kind::Box: {
+      // Inside the box grown by r: leave through the nearest face.
+      const float pc[3] = {p.x, p.y, p.z};
+      float best = INFINITY;
+      int best_axis = -1;
+      float best_sign = 0.0f;
+      for (int axis = 0; axis < 3; ++axis) {
+        const float to_min = pc[axis] - (s.a[axis] - r);
+        const float to_max = (s.b[axis] + r) - pc[axis];
+        if (to_min <= 0.0f || to_max <= 0.0f) return;  // outside on this axis
+        if (to_min < best) best = to_min, best_axis = axis, best_sign = -1.0f;
+        if (to_max < best) best = to_max, best_axis = axis, best_sign = 1.0f;
+      }
+      float n[3] = {0, 0, 0};
+      n[best_axis] = best_sign;
+      resolve_contact(p, x, n, best, s.friction);
+      break;
+    }
+  }
+}
+
+}  // namespace
+
+void solve_collisions(const ParticleView& p, const CollisionParams& params,
+                      std::span<const CollisionShape> shapes) {
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, p.n, 2048), [&](const auto& range) {
+    for (std::size_t i = range.begin(); i != range.end(); ++i) {
+      if (p.w[i] <= 0.0f) continue;
+      const float r = phase_material(p.phase[i]) == Material::Fluid ? params.fluid_radius : 0.0f;
+      Point q{p.px[i], p.py[i], p.pz[i]};
+      const Point x{p.x[i], p.y[i], p.z[i]};
+      for (const CollisionShape& s : shapes) collide_shape(q, x, s, r);
+      collide_domain(q, x, params, r);  // last: the domain always wins
+      p.px[i] = q.x;
+      p.py[i] = q.y;
+      p.pz[i] = q.z;
+    }
+  });
+}
+
+}  // namespace seiche::kernels

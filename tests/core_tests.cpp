@@ -1,0 +1,254 @@
+// Core layer: the store, scenes run through the Simulation, the runner's files and report.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <numeric>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "seiche/output_files.hpp"
+#include "seiche/particle_store.hpp"
+#include "seiche/runner.hpp"
+#include "seiche/scene_loader.hpp"
+#include "seiche/simulation.hpp"
+
+using namespace seiche;
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path scene_path(const char* name) { return fs::path(SEICHE_SCENES_DIR) / name; }
+
+fs::path fresh_dir(const std::string& name) {
+  const fs::path d = fs::temp_directory_path() / ("seiche_core_tests_" + name);
+  fs::remove_all(d);
+  return d;
+}
+
+std::string read_file(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+bool inside_domain(const Simulation& sim) {
+  const auto& s = sim.particles();
+  const auto& d = sim.scene().domain;
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    if (!(s.x[i] >= d.min[0] && s.x[i] <= d.max[0] && s.y[i] >= d.min[1] && s.y[i] <= d.max[1] &&
+          s.z[i] >= d.min[2] && s.z[i] <= d.max[2]))
+      return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+// ---- Store ------------------------------------------------------------------------------------
+
+TEST(ParticleStore, ColumnsAreAlignedPaddedAndOptional) {
+  ParticleStore s;
+  s.resize(37);
+  EXPECT_EQ(reinterpret_cast<std::uintptr_t>(s.x.data()) % 64, 0u);
+  EXPECT_EQ(reinterpret_cast<std::uintptr_t>(s.id.data()) % 64, 0u);
+  EXPECT_EQ(s.vz.storage().size() % 16, 0u);
+  EXPECT_GE(s.vz.storage().size(), 37u);
+  EXPECT_FALSE(s.density.allocated());
+  EXPECT_FALSE(s.omega_x.allocated());
+  s.enable_fluid_columns();
+  EXPECT_TRUE(s.density.allocated());
+  EXPECT_EQ(s.density.size(), 37u);
+}
+
+TEST(ParticleStore, ReorderMovesEveryStateColumnByOnePermutation) {
+  ParticleStore s;
+  s.resize(5);
+  for (int i = 0; i < 5; ++i) {
+    s.x[i] = float(i), s.vy[i] = 10.0f * i, s.w[i] = 100.0f * i;
+    s.id[i] = i, s.phase[i] = std::uint32_t(7 * i);
+  }
+  const std::vector<std::uint32_t> order = {3, 0, 4, 1, 2};
+  s.reorder(order);
+  for (int k = 0; k < 5; ++k) {
+    EXPECT_EQ(s.id[k], int(order[k]));
+    EXPECT_EQ(s.x[k], float(order[k]));
+    EXPECT_EQ(s.vy[k], 10.0f * order[k]);
+    EXPECT_EQ(s.w[k], 100.0f * order[k]);
+    EXPECT_EQ(s.phase[k], 7u * order[k]);
+  }
+  const auto inv = inverse_permutation(order);
+  for (std::uint32_t k = 0; k < 5; ++k) EXPECT_EQ(inv[order[k]], k);
+}
+
+// ---- Scenes through the simulation ---------------------------------------------------------------
+
+TEST(Simulation, SeedWorkedExampleAfterOneFrame) {
+  Simulation sim(load_scene_file(scene_path("seed_example.json")));
+  sim.step_frame();
+  const auto& s = sim.particles();
+  ASSERT_EQ(s.size(), 2u);
+  ASSERT_EQ(s.id[0], 0);
+  EXPECT_NEAR(s.x[0], 14.0 / 3, 1e-5);
+  EXPECT_NEAR(s.y[0], 19.0 / 6, 1e-5);
+  EXPECT_NEAR(s.z[0], 7.0 / 3, 1e-5);
+  EXPECT_NEAR(s.x[1], 8.0 / 3, 1e-5);
+  EXPECT_NEAR(s.y[1], 25.0 / 6, 1e-5);
+  EXPECT_NEAR(s.z[1], 13.0 / 3, 1e-5);
+  EXPECT_EQ(sim.pipeline(), (std::vector<std::string>{"predict", "distance", "collisions", "update"}));
+}
+
+TEST(Simulation, ComplianceIsInPhysicalUnits) {
+  // A 1 kg particle hanging from a pinned one on a constraint of compliance alpha: XPBD
+  // oscillates around the static stretch m g alpha, whatever the substep count.
+  for (int substeps : {4, 16}) {
+    SceneDef scene;
+    scene.domain.min = {-2, -2, -2};
+    scene.domain.max = {2, 2, 2};
+    scene.solver.substeps = substeps;
+    scene.solver.iterations = 1;
+    scene.particles = {{{0, 1, 0}, {0, 0, 0}, 0.0f}, {{0, 0, 0}, {0, 0, 0}, 1.0f}};
+    const float alpha = 1e-3f;
+    scene.distance_constraints = {{0, 1, 1.0f, alpha}};
+    Simulation sim(scene);
+    double mean_stretch = 0.0;
+    const int frames = 120;  // 2 s: about 10 periods of 2 pi sqrt(m alpha) = 0.2 s
+    for (int f = 0; f < frames; ++f) {
+      sim.step_frame();
+      const auto& s = sim.particles();
+      const std::size_t hanging = s.id[0] == 1 ? 0 : 1;
+      mean_stretch += (1.0 - s.y[hanging]) - 1.0;
+    }
+    mean_stretch /= frames;
+    EXPECT_NEAR(mean_stretch, 9.81 * alpha, 0.1 * 9.81 * alpha) << substeps << " substeps";
+  }
+}
+
+TEST(Simulation, RestingFluidColumnKeepsItsDensity) {
+  SceneDef scene;
+  scene.domain.min = {0, 0, 0};
+  scene.domain.max = {0.3f, 1.0f, 0.3f};
+  FluidDef column;
+  column.box.min = {0, 0, 0};
+  column.box.max = {0.3f, 0.6f, 0.3f};
+  column.spacing = 0.02f;
+  scene.fluids = {column};
+  Simulation sim(scene);
+  const std::size_t n = sim.particles().size();
+  ASSERT_EQ(n, 15u * 30u * 15u);
+  FrameMetrics m;
+  for (int f = 0; f < 120; ++f) m = sim.step_frame();  // 2 s
+  ASSERT_TRUE(m.fluid.has_value());
+  EXPECT_LT(m.fluid->mean, 0.01);
+  EXPECT_LT(m.fluid->max, 0.05);
+  EXPECT_EQ(m.non_finite, 0u);
+  EXPECT_TRUE(inside_domain(sim));
+  // Settled: the column is at rest.
+  EXPECT_LT(m.max_speed, 0.2);
+}
+
+TEST(Simulation, DamBreakStaysFiniteAndInside) {
+  Simulation sim(load_scene_text(default_scene_json(), "<default scene>"));
+  const std::size_t n = sim.particles().size();
+  ASSERT_GT(n, 40000u);
+  for (int f = 0; f < 120; ++f) {  // 2 s
+    const FrameMetrics m = sim.step_frame();
+    ASSERT_EQ(m.non_finite, 0u) << "frame " << f + 1;
+    ASSERT_EQ(m.particles, n);
+  }
+  EXPECT_TRUE(inside_domain(sim));
+}
+
+// ---- Runner: files, report, determinism -------------------------------------------------------------
+
+TEST(Runner, OneAndTwoThreadsWriteBitIdenticalFiles) {
+  // Fluid, a chain of raw particles on distance constraints, and colliders: every pass runs.
+  std::vector<std::string> overrides = {"fluids.0.spacing=0.06", "fluids.1.spacing=0.06",
+                                        "fluids.0.vorticity=0.05", "fluids.1.vorticity=0.05"};
+  SceneDef scene = load_scene_file(scene_path("double_dam_break.json"), overrides);
+  for (int k = 0; k < 10; ++k) scene.particles.push_back({{1.5f + 0.1f * k, 2.0f, 0.7f}, {0, 0, 0}, k == 0 ? 0.0f : 1.0f});
+  for (int k = 0; k + 1 < 10; ++k) scene.distance_constraints.push_back({k, k + 1, -1.0f, 0.0f});
+  RunOptions one, two;
+  one.frames = two.frames = 30;
+  one.threads = 1, two.threads = 2;
+  one.out_dir = fresh_dir("threads1");
+  two.out_dir = fresh_dir("threads2");
+  run_scene(scene, one);
+  run_scene(scene, two);
+  for (int f : {1, 15, 30}) {
+    const std::string name = frame_file_name("particles", f, "ply");
+    const std::string a = read_file(one.out_dir / name), b = read_file(two.out_dir / name);
+    ASSERT_FALSE(a.empty());
+    EXPECT_TRUE(a == b) << name << " differs between 1 and 2 threads";
+  }
+}
+
+TEST(Runner, WritesPlyInIdOrderAndAReport) {
+  const fs::path dir = fresh_dir("report");
+  SceneDef scene = load_scene_file(scene_path("dam_break.json"), std::vector<std::string>{"fluids.0.spacing=0.08"});
+  scene.particles.push_back({{3.0f, 2.0f, 0.5f}, {0, 0, 0}, 1.0f});
+  scene.particles.push_back({{3.2f, 2.0f, 0.5f}, {0, 0, 0}, 1.0f});
+  scene.distance_constraints.push_back({0, 1, -1.0f, 0.0f});
+  RunOptions o;
+  o.frames = 3;
+  o.out_dir = dir;
+  o.report = dir / "report.json";
+  const RunResult r = run_scene(scene, o);
+  ASSERT_EQ(r.frames, 3);
+
+  // PLY: header, then records of 7 values in id order.
+  const std::string ply = read_file(dir / "particles.0003.ply");
+  const std::size_t header_end = ply.find("end_header\n");
+  ASSERT_NE(header_end, std::string::npos);
+  EXPECT_NE(ply.find("format binary_little_endian 1.0"), std::string::npos);
+  EXPECT_NE(ply.find("element vertex " + std::to_string(r.particles) + "\n"), std::string::npos);
+  const char* body = ply.data() + header_end + 11;
+  ASSERT_EQ(ply.size() - (header_end + 11), r.particles * 28);
+  for (std::size_t k = 0; k < r.particles; ++k) {
+    std::int32_t id;
+    std::memcpy(&id, body + 28 * k + 24, 4);
+    ASSERT_EQ(id, std::int32_t(k));
+  }
+  float y0;  // particle 0 fell for 3 frames under gravity
+  std::memcpy(&y0, body + 4, 4);
+  EXPECT_LT(y0, 2.0f);
+  for (const auto& e : fs::directory_iterator(dir))
+    EXPECT_EQ(e.path().extension() == ".tmp", false) << "left a temporary file: " << e.path();
+
+  const nlohmann::json rep = nlohmann::json::parse(read_file(dir / "report.json"));
+  EXPECT_EQ(rep["status"], "ok");
+  EXPECT_EQ(rep["settings"]["particles"], r.particles);
+  ASSERT_EQ(rep["frames"].size(), 3u);
+  const auto& f3 = rep["frames"][2];
+  EXPECT_EQ(f3["frame"], 3);
+  EXPECT_EQ(f3["non_finite"], 0);
+  for (const char* pass : {"predict", "neighbors", "fluid density", "distance", "collisions", "update", "viscosity"})
+    EXPECT_TRUE(f3["pass_ms"].contains(pass)) << pass;
+  EXPECT_FALSE(f3["pass_ms"].contains("vorticity"));  // off in this scene: not built, not timed
+  EXPECT_GE(f3["fluid_density_error"]["max"].get<double>(), f3["fluid_density_error"]["mean"].get<double>());
+  EXPECT_LT(f3["distance_error"]["max"].get<double>(), 1e-3);
+  EXPECT_GT(f3["kinetic_energy"].get<double>(), 0.0);
+  EXPECT_GT(f3["max_speed"].get<double>(), 0.0);
+}
+
+TEST(Runner, NonFiniteStateStopsTheRun) {
+  // A NaN velocity (which no scene file can hold) must stop the run, not be hidden by a wall.
+  SceneDef scene;
+  scene.particles = {{{0.5f, 0.5f, 0.5f}, {std::nanf(""), 0, 0}, 1.0f}};
+  RunOptions o;
+  o.frames = 5;
+  o.report = fresh_dir("diverged") / "report.json";
+  EXPECT_THROW(run_scene(scene, o), SimulationError);
+  const nlohmann::json rep = nlohmann::json::parse(read_file(o.report));
+  EXPECT_EQ(rep["status"], "error");
+  EXPECT_GT(rep["frames"][0]["non_finite"].get<int>(), 0);
+}
+
+TEST(OutputFiles, UnwritableFolderIsAnIoError) {
+  EXPECT_THROW(prepare_output_directory("/dev/null/seiche"), IoError);
+  EXPECT_THROW(write_file_atomically("/nonexistent-dir/x.ply", "data"), IoError);
+}

@@ -1,0 +1,705 @@
+// The scene loader: defaults for absent keys, values that round-trip, and for every kind of bad
+// input an error that names the file and the exact JSON path of the culprit.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <optional>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "seiche/scene_loader.hpp"
+
+namespace seiche {
+namespace {
+
+namespace fs = std::filesystem;
+
+const char* const kSource = "test.json";
+
+SceneDef load(std::string_view text, const std::vector<std::string>& overrides = {}) {
+  return load_scene_text(text, kSource, overrides);
+}
+
+// The SceneError thrown by loading `text`, or nullopt (and a test failure) if none was thrown.
+std::optional<SceneError> load_error(std::string_view text, const std::vector<std::string>& overrides = {}) {
+  try {
+    load(text, overrides);
+  } catch (const SceneError& e) {
+    return e;
+  }
+  ADD_FAILURE() << "no SceneError for: " << text;
+  return std::nullopt;
+}
+
+void expect_same(const BoxDef& a, const BoxDef& b) {
+  EXPECT_EQ(a.min, b.min);
+  EXPECT_EQ(a.max, b.max);
+}
+
+void expect_same(const SolverDef& a, const SolverDef& b) {
+  EXPECT_EQ(a.frame_dt, b.frame_dt);
+  EXPECT_EQ(a.substeps, b.substeps);
+  EXPECT_EQ(a.iterations, b.iterations);
+  EXPECT_EQ(a.gravity, b.gravity);
+  EXPECT_EQ(a.relaxation, b.relaxation);
+  EXPECT_EQ(a.tensile_k, b.tensile_k);
+  EXPECT_EQ(a.tensile_n, b.tensile_n);
+  EXPECT_EQ(a.tensile_dq, b.tensile_dq);
+}
+
+void expect_same(const DomainDef& a, const DomainDef& b) {
+  EXPECT_EQ(a.min, b.min);
+  EXPECT_EQ(a.max, b.max);
+  EXPECT_EQ(a.friction, b.friction);
+}
+
+void expect_same(const FluidDef& a, const FluidDef& b) {
+  expect_same(a.box, b.box);
+  EXPECT_EQ(a.spacing, b.spacing);
+  EXPECT_EQ(a.kernel_radius, b.kernel_radius);
+  EXPECT_EQ(a.rest_density, b.rest_density);
+  EXPECT_EQ(a.viscosity, b.viscosity);
+  EXPECT_EQ(a.vorticity, b.vorticity);
+  EXPECT_EQ(a.velocity, b.velocity);
+}
+
+void expect_same(const ParticleDef& a, const ParticleDef& b) {
+  EXPECT_EQ(a.x, b.x);
+  EXPECT_EQ(a.v, b.v);
+  EXPECT_EQ(a.mass, b.mass);
+}
+
+void expect_same(const DistanceConstraintDef& a, const DistanceConstraintDef& b) {
+  EXPECT_EQ(a.i, b.i);
+  EXPECT_EQ(a.j, b.j);
+  EXPECT_EQ(a.rest_length, b.rest_length);
+  EXPECT_EQ(a.compliance, b.compliance);
+}
+
+void expect_same(const ColliderDef& a, const ColliderDef& b) {
+  EXPECT_EQ(a.shape, b.shape);
+  EXPECT_EQ(a.point, b.point);
+  EXPECT_EQ(a.normal, b.normal);
+  expect_same(a.box, b.box);
+  EXPECT_EQ(a.center, b.center);
+  EXPECT_EQ(a.radius, b.radius);
+  EXPECT_EQ(a.friction, b.friction);
+}
+
+// A directory under the system temp directory, removed with everything in it.
+class TempDir {
+ public:
+  TempDir() {
+    std::random_device rd;
+    path_ = fs::temp_directory_path() / ("seiche_scene_tests_" + std::to_string(rd()) + std::to_string(rd()));
+    fs::create_directories(path_);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+
+  fs::path write(const std::string& name, std::string_view text) const {
+    const fs::path file = path_ / name;
+    std::ofstream(file, std::ios::binary) << text;
+    return file;
+  }
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+fs::path repository_root() {
+#ifdef SEICHE_SCENES_DIR
+  return fs::path(SEICHE_SCENES_DIR).parent_path();
+#else  // the sources are compiled with absolute paths, so __FILE__ locates the repository
+  return fs::path(__FILE__).parent_path().parent_path();
+#endif
+}
+
+std::string read_text(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// ---- Defaults --------------------------------------------------------------------------------
+
+TEST(SceneLoader, EmptyDocumentIsTheDefaultScene) {
+  const SceneDef scene = load("{}");
+  const SceneDef defaults;
+  EXPECT_EQ(scene.name, "scene");
+  expect_same(scene.solver, defaults.solver);
+  expect_same(scene.domain, defaults.domain);
+  EXPECT_EQ(scene.output.frames, defaults.output.frames);
+  EXPECT_TRUE(scene.fluids.empty());
+  EXPECT_TRUE(scene.particles.empty());
+  EXPECT_TRUE(scene.distance_constraints.empty());
+  EXPECT_TRUE(scene.colliders.empty());
+}
+
+TEST(SceneLoader, EmptySectionsKeepTheirDefaults) {
+  const SceneDef scene = load(R"({"solver": {}, "domain": {}, "output": {}, "fluids": [], "particles": [],
+                                  "distance_constraints": [], "colliders": []})");
+  const SceneDef defaults;
+  expect_same(scene.solver, defaults.solver);
+  expect_same(scene.domain, defaults.domain);
+  EXPECT_EQ(scene.output.frames, defaults.output.frames);
+}
+
+TEST(SceneLoader, AbsentEntryKeysTakeTheStructDefaults) {
+  const SceneDef scene = load(R"({
+    "fluids": [ { "box": { "min": [0, 0, 0], "max": [0.5, 0.5, 0.5] } } ],
+    "particles": [ { "x": [0.25, 0.5, 0.75] }, { "x": [0.5, 0.5, 0.5] } ],
+    "distance_constraints": [ { "i": 0, "j": 1 } ],
+    "colliders": [ { "sphere": { "radius": 0.5 } }, { "plane": {} }, { "box": {} } ] })");
+
+  FluidDef fluid;
+  fluid.box.max = {0.5f, 0.5f, 0.5f};
+  ASSERT_EQ(scene.fluids.size(), 1u);
+  expect_same(scene.fluids[0], fluid);
+
+  ParticleDef particle;
+  particle.x = {0.25f, 0.5f, 0.75f};
+  ASSERT_EQ(scene.particles.size(), 2u);
+  expect_same(scene.particles[0], particle);
+
+  DistanceConstraintDef constraint;
+  constraint.i = 0;
+  constraint.j = 1;
+  ASSERT_EQ(scene.distance_constraints.size(), 1u);
+  expect_same(scene.distance_constraints[0], constraint);
+  EXPECT_LT(scene.distance_constraints[0].rest_length, 0.0f) << "absent rest_length means the initial distance";
+
+  ASSERT_EQ(scene.colliders.size(), 3u);
+  ColliderDef sphere;
+  sphere.shape = ColliderDef::Shape::Sphere;
+  sphere.radius = 0.5f;
+  expect_same(scene.colliders[0], sphere);
+  expect_same(scene.colliders[1], ColliderDef{});  // a plane through the origin facing +y
+  ColliderDef box;
+  box.shape = ColliderDef::Shape::Box;
+  expect_same(scene.colliders[2], box);
+}
+
+// ---- Values round-trip -----------------------------------------------------------------------
+
+// Every value below is exactly representable as a float, so the comparisons are exact.
+constexpr const char* kFullScene = R"({
+  "name": "full",
+  "solver": { "frame_dt": 0.005, "substeps": 7, "iterations": 3, "gravity": [0.5, -4.25, 1],
+              "relaxation": 0.125, "tensile_k": 0.25, "tensile_n": 2, "tensile_dq": 0.375 },
+  "domain": { "min": [-1, -2, -3], "max": [4, 5, 6], "friction": 0.5 },
+  "output": { "frames": 17 },
+  "fluids": [
+    { "box": { "min": [-1, -2, -3], "max": [0, -1, -2] }, "spacing": 0.0625, "kernel_radius": 2.5,
+      "rest_density": 500, "viscosity": 0.25, "vorticity": 0.75, "velocity": [1, 2, 3] },
+    { "box": { "min": [1, 1, 1], "max": [1.5, 1.25, 2] }, "spacing": 0.0625, "kernel_radius": 2.5,
+      "rest_density": 500, "viscosity": 0.25, "vorticity": 0.75 } ],
+  "particles": [ { "x": [3, 3, 2], "v": [0, -1, 0.5], "mass": 10 }, { "x": [1, 5, 6], "mass": 0 },
+                 { "x": [0, 0, 0], "mass": 2 } ],
+  "distance_constraints": [ { "i": 0, "j": 1, "rest_length": 3, "compliance": 0.001953125 },
+                            { "i": 2, "j": 0, "rest_length": 0 } ],
+  "colliders": [ { "sphere": { "center": [1, 2, 3], "radius": 0.5 }, "friction": 0.25 },
+                 { "plane": { "point": [0, 1, 0], "normal": [3, 0, 4] } },
+                 { "box": { "min": [2, 2, 2], "max": [3, 2.5, 4] }, "friction": 1.5 } ] })";
+
+TEST(SceneLoader, FullSceneRoundTrips) {
+  const SceneDef s = load(kFullScene);
+  EXPECT_EQ(s.name, "full");
+
+  EXPECT_EQ(s.solver.frame_dt, 0.005);
+  EXPECT_EQ(s.solver.substeps, 7);
+  EXPECT_EQ(s.solver.iterations, 3);
+  EXPECT_EQ(s.solver.gravity, (Vec3{0.5f, -4.25f, 1.0f}));
+  EXPECT_EQ(s.solver.relaxation, 0.125f);
+  EXPECT_EQ(s.solver.tensile_k, 0.25f);
+  EXPECT_EQ(s.solver.tensile_n, 2);
+  EXPECT_EQ(s.solver.tensile_dq, 0.375f);
+
+  EXPECT_EQ(s.domain.min, (Vec3{-1.0f, -2.0f, -3.0f}));
+  EXPECT_EQ(s.domain.max, (Vec3{4.0f, 5.0f, 6.0f}));
+  EXPECT_EQ(s.domain.friction, 0.5f);
+  EXPECT_EQ(s.output.frames, 17);
+
+  ASSERT_EQ(s.fluids.size(), 2u);
+  const FluidDef& f = s.fluids[0];
+  EXPECT_EQ(f.box.min, (Vec3{-1.0f, -2.0f, -3.0f}));
+  EXPECT_EQ(f.box.max, (Vec3{0.0f, -1.0f, -2.0f}));
+  EXPECT_EQ(f.spacing, 0.0625f);
+  EXPECT_EQ(f.kernel_radius, 2.5f);
+  EXPECT_EQ(f.rest_density, 500.0f);
+  EXPECT_EQ(f.viscosity, 0.25f);
+  EXPECT_EQ(f.vorticity, 0.75f);
+  EXPECT_EQ(f.velocity, (Vec3{1.0f, 2.0f, 3.0f}));
+  EXPECT_EQ(s.fluids[1].box.max, (Vec3{1.5f, 1.25f, 2.0f}));
+  EXPECT_EQ(s.fluids[1].velocity, (Vec3{0.0f, 0.0f, 0.0f}));
+
+  ASSERT_EQ(s.particles.size(), 3u);
+  EXPECT_EQ(s.particles[0].x, (Vec3{3.0f, 3.0f, 2.0f}));
+  EXPECT_EQ(s.particles[0].v, (Vec3{0.0f, -1.0f, 0.5f}));
+  EXPECT_EQ(s.particles[0].mass, 10.0f);
+  EXPECT_EQ(s.particles[1].mass, 0.0f);  // pinned
+  EXPECT_EQ(s.particles[2].mass, 2.0f);
+
+  ASSERT_EQ(s.distance_constraints.size(), 2u);
+  EXPECT_EQ(s.distance_constraints[0].i, 0);
+  EXPECT_EQ(s.distance_constraints[0].j, 1);
+  EXPECT_EQ(s.distance_constraints[0].rest_length, 3.0f);
+  EXPECT_EQ(s.distance_constraints[0].compliance, 0.001953125f);
+  EXPECT_EQ(s.distance_constraints[1].i, 2);
+  EXPECT_EQ(s.distance_constraints[1].rest_length, 0.0f);  // explicit zero is a length, not "unset"
+
+  ASSERT_EQ(s.colliders.size(), 3u);
+  EXPECT_EQ(s.colliders[0].shape, ColliderDef::Shape::Sphere);
+  EXPECT_EQ(s.colliders[0].center, (Vec3{1.0f, 2.0f, 3.0f}));
+  EXPECT_EQ(s.colliders[0].radius, 0.5f);
+  EXPECT_EQ(s.colliders[0].friction, 0.25f);
+  EXPECT_EQ(s.colliders[1].shape, ColliderDef::Shape::Plane);
+  EXPECT_EQ(s.colliders[1].point, (Vec3{0.0f, 1.0f, 0.0f}));
+  EXPECT_NEAR(s.colliders[1].normal[0], 0.6f, 1e-7f);  // [3, 0, 4] normalized
+  EXPECT_EQ(s.colliders[1].normal[1], 0.0f);
+  EXPECT_NEAR(s.colliders[1].normal[2], 0.8f, 1e-7f);
+  EXPECT_EQ(s.colliders[2].shape, ColliderDef::Shape::Box);
+  EXPECT_EQ(s.colliders[2].box.min, (Vec3{2.0f, 2.0f, 2.0f}));
+  EXPECT_EQ(s.colliders[2].box.max, (Vec3{3.0f, 2.5f, 4.0f}));
+  EXPECT_EQ(s.colliders[2].friction, 1.5f);
+}
+
+TEST(SceneLoader, PlaneNormalIsNormalized) {
+  const SceneDef s = load(R"({"colliders": [{"plane": {"normal": [0, 0, -1e-20]}},
+                                            {"plane": {"normal": [1, 1, 1]}}]})");
+  EXPECT_EQ(s.colliders[0].normal, (Vec3{0.0f, 0.0f, -1.0f}));  // tiny but nonzero is fine
+  for (float n : s.colliders[1].normal) EXPECT_NEAR(n, 1.0f / std::sqrt(3.0f), 1e-7f);
+}
+
+TEST(SceneLoader, IntegersMayBeWrittenAsIntegralNumbers) {
+  const SceneDef s = load(R"({"solver": {"substeps": 8.0, "iterations": 1e1}})");
+  EXPECT_EQ(s.solver.substeps, 8);
+  EXPECT_EQ(s.solver.iterations, 10);
+}
+
+TEST(SceneLoader, BoundaryValuesAreAccepted) {
+  const SceneDef s = load(R"({
+    "solver": {"substeps": 10000, "iterations": 1, "relaxation": 0, "tensile_k": 0, "tensile_n": 1},
+    "fluids": [{"box": {"min": [0, 0, 0], "max": [0.02, 0.02, 0.02]}, "kernel_radius": 1,
+                "viscosity": 1, "vorticity": 0}],
+    "particles": [{"x": [1, 1, 1]}, {"x": [0, 0, 0]}],
+    "output": {"frames": 1}})");
+  EXPECT_EQ(s.solver.substeps, 10000);
+  EXPECT_EQ(s.fluids[0].viscosity, 1.0f);
+  EXPECT_EQ(s.particles[0].x, (Vec3{1.0f, 1.0f, 1.0f}));  // on the domain's corner: inside
+}
+
+// ---- Name ------------------------------------------------------------------------------------
+
+TEST(SceneLoader, NameComesFromTheDocumentOrFileStem) {
+  EXPECT_EQ(load("{}").name, "scene");
+  EXPECT_EQ(load(R"({"name": "pool"})").name, "pool");
+
+  const TempDir dir;
+  EXPECT_EQ(load_scene_file(dir.write("wave_tank.json", "{}")).name, "wave_tank");
+  EXPECT_EQ(load_scene_file(dir.write("other.json", R"({"name": "given"})")).name, "given");
+}
+
+// ---- Bad input: every case names the exact path ----------------------------------------------
+
+struct BadCase {
+  const char* label;      // test name suffix
+  const char* json;
+  const char* path;       // expected json_path()
+  const char* problem;    // a substring of problem()
+};
+
+class BadScene : public testing::TestWithParam<BadCase> {};
+
+TEST_P(BadScene, ThrowsWithPathAndFile) {
+  const BadCase& c = GetParam();
+  const auto e = load_error(c.json);
+  ASSERT_TRUE(e.has_value());
+  EXPECT_EQ(e->json_path(), c.path) << e->what();
+  EXPECT_EQ(e->file(), kSource);
+  EXPECT_NE(e->problem().find(c.problem), std::string::npos) << "problem: " << e->problem();
+  EXPECT_EQ(std::string(e->what()), std::string(kSource) + ": " + c.path + ": " + e->problem());
+}
+
+// Fragments for the cases below.
+#define FLUID_BOX R"("box": {"min": [0, 0, 0], "max": [0.5, 0.5, 0.5]})"
+#define TWO_PARTICLES R"("particles": [{"x": [0, 0, 0]}, {"x": [1, 1, 1]}])"
+
+const BadCase kBadCases[] = {
+    // Document
+    {"RootNotObject", "[1, 2]", "(root)", "expected a JSON object"},
+    {"RootNull", "null", "(root)", "expected a JSON object"},
+    {"Empty", "", "(root)", "malformed JSON at line 1, column 1"},
+    {"TrailingComma", "{\n  \"solver\": {\"substeps\": 4,}\n}", "(root)", "malformed JSON at line 2, column"},
+    {"BadLiteral", "{\n\n  \"name\": tru\n}", "(root)", "malformed JSON at line 3, column 14: syntax error"},
+    {"BadLiteralMidLine", "{\"a\": 1,\n \"b\": tru}", "(root)", "at line 2, column 10:"},
+    {"Truncated", "{\"a\":\n\n [1,2", "(root)", "at line 3, column 6:"},
+    {"NumberOverflowsDouble", "{\"domain\":\n  {\"friction\": 1e400}}", "(root)",
+     "malformed JSON at line 2, column 16: number overflow parsing '1e400'"},
+    {"DuplicateKey", R"({"solver": {"substeps": 4, "substeps": 5}})", "solver.substeps", "duplicate key"},
+    {"DuplicateKeyInArray", R"({"fluids": [{)" FLUID_BOX R"(}, {"box": {"min": [0,0,0], "min": [1,1,1]}}]})",
+     "fluids[1].box.min", "duplicate key"},
+    {"DuplicateSection", R"({"fluids": [], "output": {}, "fluids": []})", "fluids", "duplicate key"},
+    // Unknown keys
+    {"UnknownRootKey", R"({"solvr": {}})", "solvr", "unknown key; did you mean \"solver\"?"},
+    {"UnknownSolverKey", R"({"solver": {"iteratons": 3}})", "solver.iteratons", "did you mean \"iterations\"?"},
+    {"UnknownKeyNoHint", R"({"output": {"format": "vtk"}})", "output.format", "the keys here are: frames"},
+    {"UnknownFluidKey", R"({"fluids": [{)" FLUID_BOX R"(, "spaceing": 0.1}]})", "fluids[0].spaceing",
+     "did you mean \"spacing\"?"},
+    {"UnknownBoxKey", R"({"fluids": [{"box": {"min": [0,0,0], "mx": [1,1,1]}}]})", "fluids[0].box.mx",
+     "did you mean \"max\"?"},
+    {"TypoOfRequiredKey", R"({"fluids": [{"bx": {}}]})", "fluids[0].bx", "did you mean \"box\"?"},
+    {"UnknownColliderShape", R"({"colliders": [{"sphera": {"radius": 1}}]})", "colliders[0].sphera",
+     "did you mean \"sphere\"?"},
+    {"UnknownSphereKey", R"({"colliders": [{"sphere": {"radius": 1, "centre": [0,0,0]}}]})",
+     "colliders[0].sphere.centre", "did you mean \"center\"?"},
+    {"UnknownParticleKey", R"({"particles": [{"x": [0,0,0], "mas": 1}]})", "particles[0].mas",
+     "did you mean \"mass\"?"},
+    // Types and shapes
+    {"StringForInteger", R"({"solver": {"substeps": "4"}})", "solver.substeps", "expected an integer, got string"},
+    {"StringForNumber", R"({"domain": {"friction": "0.1"}})", "domain.friction", "expected a number, got string"},
+    {"StringNan", R"({"solver": {"relaxation": "nan"}})", "solver.relaxation", "expected a number, got string \"nan\""},
+    {"BoolForNumber", R"({"fluids": [{)" FLUID_BOX R"(, "spacing": true}]})", "fluids[0].spacing",
+     "expected a number, got boolean"},
+    {"NullForNumber", R"({"solver": {"frame_dt": null}})", "solver.frame_dt", "expected a number, got null"},
+    {"FractionalInteger", R"({"solver": {"iterations": 2.5}})", "solver.iterations", "expected an integer, got 2.5"},
+    {"HugeInteger", R"({"output": {"frames": 1e12}})", "output.frames", "outside the range of a 32-bit integer"},
+    {"NameNotString", R"({"name": 5})", "name", "expected a string, got 5"},
+    {"NameEmpty", R"({"name": ""})", "name", "must not be empty"},
+    {"SectionNotObject", R"({"solver": 3})", "solver", "expected an object, got 3"},
+    {"ListNotArray", R"({"fluids": {}})", "fluids", "expected an array of objects, got object"},
+    {"EntryNotObject", R"({"particles": [{"x": [0,0,0]}, 7]})", "particles[1]", "expected an object, got 7"},
+    {"VecTooShort", R"({"solver": {"gravity": [0, -9.81]}})", "solver.gravity", "expected 3 numbers, got 2"},
+    {"VecTooLong", R"({"domain": {"max": [1, 1, 1, 1]}})", "domain.max", "expected 3 numbers, got 4"},
+    {"VecNotArray", R"({"domain": {"max": 1}})", "domain.max", "expected an array of 3 numbers"},
+    {"VecElementType", R"({"solver": {"gravity": [0, "down", 0]}})", "solver.gravity[1]", "expected a number"},
+    // Not finite as float
+    {"FloatOverflow", R"({"domain": {"friction": 1e39}})", "domain.friction", "not finite as a 32-bit float"},
+    {"VecElementOverflow", R"({"solver": {"gravity": [0, -1e39, 0]}})", "solver.gravity[1]", "not finite"},
+    // Ranges: solver
+    {"FrameDtZero", R"({"solver": {"frame_dt": 0}})", "solver.frame_dt", "must be > 0, got 0"},
+    {"FrameDtNegative", R"({"solver": {"frame_dt": -0.01}})", "solver.frame_dt", "must be > 0"},
+    {"SubstepsZero", R"({"solver": {"substeps": 0}})", "solver.substeps", "must be in [1, 10000], got 0"},
+    {"SubstepsHuge", R"({"solver": {"substeps": 10001}})", "solver.substeps", "must be in [1, 10000]"},
+    {"IterationsZero", R"({"solver": {"iterations": 0}})", "solver.iterations", "must be in [1, 10000]"},
+    {"IterationsHuge", R"({"solver": {"iterations": 1000000}})", "solver.iterations", "must be in [1, 10000]"},
+    {"RelaxationNegative", R"({"solver": {"relaxation": -0.5}})", "solver.relaxation", "must be >= 0, got -0.5"},
+    {"TensileKNegative", R"({"solver": {"tensile_k": -0.1}})", "solver.tensile_k", "must be >= 0"},
+    {"TensileNBelowOne", R"({"solver": {"tensile_n": 0}})", "solver.tensile_n", "must be in [1, 8]"},
+    {"TensileNNotInteger", R"({"solver": {"tensile_n": 2.5}})", "solver.tensile_n", "integer"},
+    {"TensileDqZero", R"({"solver": {"tensile_dq": 0}})", "solver.tensile_dq", "must be in (0, 1)"},
+    {"TensileDqOne", R"({"solver": {"tensile_dq": 1}})", "solver.tensile_dq", "must be in (0, 1)"},
+    // Ranges: domain, output
+    {"DomainFlat", R"({"domain": {"min": [0, 0, 1], "max": [1, 1, 1]}})", "domain", "along z min = 1 and max = 1"},
+    {"DomainInverted", R"({"domain": {"min": [2, 0, 0]}})", "domain", "along x min = 2 and max = 1"},
+    {"DomainFrictionNegative", R"({"domain": {"friction": -0.1}})", "domain.friction", "must be >= 0"},
+    {"FramesZero", R"({"output": {"frames": 0}})", "output.frames", "must be >= 1, got 0"},
+    // Ranges: fluids
+    {"FluidBoxMissing", R"({"fluids": [{"spacing": 0.1}]})", "fluids[0].box", "required key is missing"},
+    {"FluidBoxInverted", R"({"fluids": [{"box": {"min": [0, 0.5, 0], "max": [1, 0.25, 1]}}]})", "fluids[0].box",
+     "min > max along y (0.5 > 0.25)"},
+    {"SpacingZero", R"({"fluids": [{)" FLUID_BOX R"(, "spacing": 0}]})", "fluids[0].spacing", "must be > 0, got 0"},
+    {"SpacingNegative", R"({"fluids": [{)" FLUID_BOX R"(, "spacing": -0.1}]})", "fluids[0].spacing", "must be > 0"},
+    {"KernelRadiusBelowOne", R"({"fluids": [{)" FLUID_BOX R"(, "kernel_radius": 0.5}]})", "fluids[0].kernel_radius",
+     "must be >= 1"},
+    {"RestDensityZero", R"({"fluids": [{)" FLUID_BOX R"(, "rest_density": 0}]})", "fluids[0].rest_density",
+     "must be > 0"},
+    {"ViscosityAboveOne", R"({"fluids": [{)" FLUID_BOX R"(, "viscosity": 1.5}]})", "fluids[0].viscosity",
+     "must be in [0, 1], got 1.5"},
+    {"ViscosityNegative", R"({"fluids": [{)" FLUID_BOX R"(, "viscosity": -0.01}]})", "fluids[0].viscosity",
+     "must be in [0, 1]"},
+    {"VorticityNegative", R"({"fluids": [{)" FLUID_BOX R"(, "vorticity": -1}]})", "fluids[0].vorticity",
+     "must be >= 0"},
+    {"FluidTooManyParticles", R"({"fluids": [{)" FLUID_BOX R"(, "spacing": 0.001}]})", "fluids[0].box",
+     "would hold 125000000 particles"},
+    {"FluidNoParticles", R"({"fluids": [{"box": {"min": [0, 0, 0], "max": [1, 0.01, 1]}}]})", "fluids[0].box",
+     "holds no particles: along y it is 0.01 m thick, less than one spacing (0.02 m)"},
+    {"FluidOutsideDomain", R"({"fluids": [{"box": {"min": [0.5, 0.5, 0.5], "max": [1.5, 1, 1]}}]})",
+     "fluids[0].box", "reaches outside the domain [0, 0, 0]..[1, 1, 1]"},
+    {"FluidSpacingDiffers",
+     R"({"fluids": [{)" FLUID_BOX R"(}, {)" FLUID_BOX R"(, "spacing": 0.025}]})", "fluids[1].spacing",
+     "0.025 differs from fluids[0] (0.02); all fluids of a scene share one material"},
+    {"FluidKernelRadiusDiffers",
+     R"({"fluids": [{)" FLUID_BOX R"(}, {)" FLUID_BOX R"(}, {)" FLUID_BOX R"(, "kernel_radius": 3}]})",
+     "fluids[2].kernel_radius", "differs from fluids[0] (2)"},
+    {"FluidRestDensityDiffers", R"({"fluids": [{)" FLUID_BOX R"(}, {)" FLUID_BOX R"(, "rest_density": 999}]})",
+     "fluids[1].rest_density", "differs from fluids[0] (1000)"},
+    {"FluidViscosityDiffers", R"({"fluids": [{)" FLUID_BOX R"(, "viscosity": 0}, {)" FLUID_BOX R"(}]})",
+     "fluids[1].viscosity", "differs from fluids[0] (0)"},
+    {"FluidVorticityDiffers", R"({"fluids": [{)" FLUID_BOX R"(}, {)" FLUID_BOX R"(, "vorticity": 0.5}]})",
+     "fluids[1].vorticity", "differs from fluids[0] (0)"},
+    // Particles
+    {"ParticleXMissing", R"({"particles": [{"x": [0,0,0]}, {"v": [0, 0, 0]}]})", "particles[1].x",
+     "required key is missing"},
+    {"ParticleMassNegative", R"({"particles": [{"x": [0,0,0]}, {"x": [0,0,0]}, {"x": [0,0,0]},
+                                               {"x": [0,0,0], "mass": -1}]})",
+     "particles[3].mass", "must be >= 0, got -1"},
+    {"ParticleOutsideDomain", R"({"particles": [{"x": [0,0,0]}, {"x": [5, 3, 2]}]})", "particles[1].x",
+     "[5, 3, 2] is outside the domain [0, 0, 0]..[1, 1, 1]"},
+    // Distance constraints
+    {"ConstraintJMissing", "{" TWO_PARTICLES R"(, "distance_constraints": [{"i": 0}]})", "distance_constraints[0].j",
+     "required key is missing"},
+    {"ConstraintIndexTooLarge", "{" TWO_PARTICLES R"(, "distance_constraints": [{"i": 0, "j": 1}, {"i": 2, "j": 0}]})",
+     "distance_constraints[1].i", "particle index 2 is out of range (valid: 0..1)"},
+    {"ConstraintIndexNegative", "{" TWO_PARTICLES R"(, "distance_constraints": [{"i": 0, "j": -1}]})",
+     "distance_constraints[0].j", "out of range (valid: 0..1)"},
+    {"ConstraintWithoutParticles", R"({"distance_constraints": [{"i": 0, "j": 1}]})", "distance_constraints[0].i",
+     "\"particles\" is empty"},
+    {"ConstraintSameParticle", "{" TWO_PARTICLES R"(, "distance_constraints": [{"i": 1, "j": 1}]})",
+     "distance_constraints[0].j", "equals i (1)"},
+    {"ConstraintNegativeRestLength",
+     "{" TWO_PARTICLES R"(, "distance_constraints": [{"i": 0, "j": 1, "rest_length": -1}]})",
+     "distance_constraints[0].rest_length", "must be >= 0, got -1"},
+    {"ConstraintNegativeCompliance",
+     "{" TWO_PARTICLES R"(, "distance_constraints": [{"i": 0, "j": 1, "compliance": -1e-6}]})",
+     "distance_constraints[0].compliance", "must be >= 0"},
+    {"ConstraintIndexNotInteger", "{" TWO_PARTICLES R"(, "distance_constraints": [{"i": 0.5, "j": 1}]})",
+     "distance_constraints[0].i", "expected an integer"},
+    // Colliders
+    {"ColliderNoShape", R"({"colliders": [{"friction": 0.2}]})", "colliders[0]", "needs a shape"},
+    {"ColliderTwoShapes", R"({"colliders": [{"plane": {}, "sphere": {"radius": 1}}]})", "colliders[0]",
+     "exactly one shape"},
+    {"ColliderFrictionNegative", R"({"colliders": [{"plane": {}, "friction": -1}]})", "colliders[0].friction",
+     "must be >= 0"},
+    {"SphereRadiusMissing", R"({"colliders": [{"plane": {}}, {"sphere": {"center": [0,0,0]}}]})",
+     "colliders[1].sphere.radius", "required key is missing"},
+    {"SphereRadiusZero", R"({"colliders": [{"sphere": {"radius": 0}}]})", "colliders[0].sphere.radius",
+     "must be > 0"},
+    {"PlaneNormalZero", R"({"colliders": [{"plane": {"normal": [0, 0, 0]}}]})", "colliders[0].plane.normal",
+     "must not be zero"},
+    {"ColliderBoxInverted", R"({"colliders": [{"box": {"min": [0, 0, 2], "max": [1, 1, 1]}}]})", "colliders[0].box",
+     "min > max along z"},
+    {"ColliderShapeNotObject", R"({"colliders": [{"plane": [0, 1, 0]}]})", "colliders[0].plane",
+     "expected an object"},
+};
+
+INSTANTIATE_TEST_SUITE_P(SceneLoader, BadScene, testing::ValuesIn(kBadCases),
+                         [](const testing::TestParamInfo<BadCase>& info) { return std::string(info.param.label); });
+
+// ---- Files -----------------------------------------------------------------------------------
+
+TEST(SceneLoaderFile, MissingFileSaysItCannotBeOpenedAndWhy) {
+  const TempDir dir;
+  const fs::path missing = dir.path() / "nope.json";
+  try {
+    load_scene_file(missing);
+    FAIL() << "no SceneError";
+  } catch (const SceneError& e) {
+    EXPECT_EQ(e.file(), missing.string());
+    EXPECT_EQ(e.json_path(), "(file)");
+    EXPECT_NE(e.problem().find("cannot open"), std::string::npos) << e.what();
+    EXPECT_NE(e.problem().find("No such file"), std::string::npos) << e.what();
+    EXPECT_EQ(std::string(e.what()).rfind(missing.string() + ": (file): ", 0), 0u) << e.what();
+  }
+}
+
+TEST(SceneLoaderFile, DirectoryIsNotAScene) {
+  const TempDir dir;
+  try {
+    load_scene_file(dir.path());
+    FAIL() << "no SceneError";
+  } catch (const SceneError& e) {
+    EXPECT_EQ(e.json_path(), "(file)");
+    EXPECT_NE(e.problem().find("directory"), std::string::npos) << e.what();
+  }
+}
+
+TEST(SceneLoaderFile, ErrorsNameTheFile) {
+  const TempDir dir;
+  const fs::path malformed = dir.write("malformed.json", "{\n  \"solver\": {\n    \"substeps\": 4\n  \n");
+  const fs::path bad_value = dir.write("bad_value.json", R"({"fluids": [{"box": {"max": [1, 1, 1]}, "spacing": -2}]})");
+  try {
+    load_scene_file(malformed);
+    FAIL() << "no SceneError";
+  } catch (const SceneError& e) {
+    EXPECT_EQ(e.file(), malformed.string());
+    EXPECT_EQ(e.json_path(), "(root)");
+    EXPECT_NE(e.problem().find("line 5"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(malformed.string()), std::string::npos);
+  }
+  try {
+    load_scene_file(bad_value);
+    FAIL() << "no SceneError";
+  } catch (const SceneError& e) {
+    EXPECT_EQ(std::string(e.what()), bad_value.string() + ": fluids[0].spacing: must be > 0, got -2");
+  }
+}
+
+TEST(SceneLoaderFile, OverridesApplyToFiles) {
+  const TempDir dir;
+  const fs::path file = dir.write("tank.json", R"({"solver": {"substeps": 2}})");
+  const std::vector<std::string> overrides = {"solver.substeps=6", "output.frames=3"};
+  const SceneDef s = load_scene_file(file, overrides);
+  EXPECT_EQ(s.solver.substeps, 6);
+  EXPECT_EQ(s.output.frames, 3);
+  EXPECT_EQ(s.name, "tank");
+}
+
+// ---- Overrides -------------------------------------------------------------------------------
+
+constexpr const char* kOneFluid = R"({"fluids": [{"box": {"min": [0, 0, 0], "max": [0.5, 0.5, 0.5]}}]})";
+
+TEST(SceneLoaderOverrides, CreateMissingSections) {
+  const SceneDef s = load(kOneFluid, {"solver.iterations=8", "domain.max=[2, 2, 2]"});
+  EXPECT_EQ(s.solver.iterations, 8);
+  EXPECT_EQ(s.solver.substeps, SolverDef{}.substeps);  // the created section has only that key
+  EXPECT_EQ(s.domain.max, (Vec3{2.0f, 2.0f, 2.0f}));
+}
+
+TEST(SceneLoaderOverrides, ArrayElementsByDotOrBracket) {
+  EXPECT_EQ(load(kOneFluid, {"fluids.0.spacing=0.25"}).fluids[0].spacing, 0.25f);
+  EXPECT_EQ(load(kOneFluid, {"fluids[0].spacing=0.125"}).fluids[0].spacing, 0.125f);
+  EXPECT_EQ(load(kOneFluid, {"fluids[0].box.max[1]=0.25"}).fluids[0].box.max, (Vec3{0.5f, 0.25f, 0.5f}));
+  EXPECT_EQ(load(R"({"solver": {"gravity": [0, -9.81, 0]}})", {"solver.gravity.1=-2"}).solver.gravity,
+            (Vec3{0.0f, -2.0f, 0.0f}));
+}
+
+TEST(SceneLoaderOverrides, ValuesAreJsonOrPlainStrings) {
+  const SceneDef s = load("{}", {"name=my_run", "solver.gravity=[0,-1.5,0]", "solver.frame_dt=0.01"});
+  EXPECT_EQ(s.name, "my_run");
+  EXPECT_EQ(s.solver.gravity, (Vec3{0.0f, -1.5f, 0.0f}));
+  EXPECT_EQ(s.solver.frame_dt, 0.01);
+  EXPECT_EQ(load("{}", {R"(name="42")"}).name, "42");
+  EXPECT_EQ(load("{}", {"name=a=b"}).name, "a=b");  // only the first '=' separates
+}
+
+TEST(SceneLoaderOverrides, LaterOverridesWinAndReplaceFileValues) {
+  const SceneDef s = load(R"({"solver": {"substeps": 3}})", {"solver.substeps=5", "solver.substeps=9"});
+  EXPECT_EQ(s.solver.substeps, 9);
+}
+
+TEST(SceneLoaderOverrides, TyposAreUnknownKeys) {
+  auto e = load_error(kOneFluid, {"solver.iteratons=8"});
+  ASSERT_TRUE(e);
+  EXPECT_EQ(e->file(), kSource);
+  EXPECT_EQ(e->json_path(), "solver.iteratons");
+  EXPECT_NE(e->problem().find("did you mean \"iterations\""), std::string::npos) << e->what();
+
+  e = load_error(kOneFluid, {"solvr.iterations=8"});
+  ASSERT_TRUE(e);
+  EXPECT_EQ(e->json_path(), "solvr");
+
+  e = load_error(kOneFluid, {"fluids.0.spacng=0.1"});
+  ASSERT_TRUE(e);
+  EXPECT_EQ(e->json_path(), "fluids[0].spacng");
+}
+
+TEST(SceneLoaderOverrides, ValuesAreCheckedLikeFileValues) {
+  auto e = load_error("{}", {"solver.substeps=0"});
+  ASSERT_TRUE(e);
+  EXPECT_EQ(e->json_path(), "solver.substeps");
+  EXPECT_EQ(e->file(), kSource);
+
+  e = load_error("{}", {"solver.relaxation=nan"});  // not JSON: the string "nan"
+  ASSERT_TRUE(e);
+  EXPECT_EQ(e->json_path(), "solver.relaxation");
+  EXPECT_NE(e->problem().find("got string \"nan\""), std::string::npos) << e->what();
+
+  e = load_error("{}", {"solver.tensile_k=inf"});
+  ASSERT_TRUE(e);
+  EXPECT_EQ(e->json_path(), "solver.tensile_k");
+
+  e = load_error("{}", {"domain.friction=1e39"});
+  ASSERT_TRUE(e);
+  EXPECT_EQ(e->json_path(), "domain.friction");
+  EXPECT_NE(e->problem().find("not finite"), std::string::npos) << e->what();
+}
+
+struct BadOverride {
+  const char* label;
+  const char* override_text;
+  const char* path;     // expected json_path(); the file is "(command line)"
+  const char* problem;  // a substring of problem()
+};
+
+class BadOverrideTest : public testing::TestWithParam<BadOverride> {};
+
+TEST_P(BadOverrideTest, ThrowsForTheCommandLine) {
+  const BadOverride& c = GetParam();
+  const auto e = load_error(kOneFluid, {c.override_text});
+  ASSERT_TRUE(e.has_value());
+  EXPECT_EQ(e->file(), "(command line)") << e->what();
+  EXPECT_EQ(e->json_path(), c.path) << e->what();
+  EXPECT_NE(e->problem().find(c.problem), std::string::npos) << "problem: " << e->problem();
+}
+
+const BadOverride kBadOverrides[] = {
+    {"NoEquals", "solver.iterations", "solver.iterations", "expected KEY=VALUE"},
+    {"EmptyKey", "=3", "(root)", "empty key"},
+    {"EmptySegment", "solver..iterations=3", "solver..iterations", "malformed override"},
+    {"TrailingDot", "solver.=3", "solver.", "malformed override"},
+    {"UnclosedBracket", "fluids[0.spacing=1", "fluids[0.spacing", "without ']'"},
+    {"BadIndex", "fluids[x].spacing=1", "fluids[x].spacing", "not an array index"},
+    {"IndexPastEnd", "fluids.1.spacing=0.1", "fluids[1]", "index 1 is past the end of fluids (1 entry"},
+    {"IndexPastEndBracket", "fluids[5].spacing=0.1", "fluids[5]", "past the end"},
+    {"IndexIntoAbsentArray", "particles[0].mass=2", "particles[0]", "particles is absent"},
+    {"IndexIntoAbsentSection", "solver.0=1", "solver[0]", "solver is absent"},
+    {"IndexIntoAbsentVec", "solver.gravity[1]=-2", "solver.gravity[1]", "solver.gravity is absent"},
+    {"IndexIntoObject", "fluids[0].box.0=1", "fluids[0].box", "is object, not an array"},
+    {"KeyIntoArray", "fluids[0].box.min.x=1", "fluids[0].box.min", "is array of 3 elements, not an object"},
+    {"VecIndexPastEnd", "fluids[0].box.max[3]=1", "fluids[0].box.max[3]", "past the end"},
+};
+
+INSTANTIATE_TEST_SUITE_P(SceneLoaderOverrides, BadOverrideTest, testing::ValuesIn(kBadOverrides),
+                         [](const testing::TestParamInfo<BadOverride>& info) { return std::string(info.param.label); });
+
+// ---- Errors ----------------------------------------------------------------------------------
+
+TEST(SceneError, WhatIsFilePathProblem) {
+  const SceneError e("a.json", "solver.substeps", "must be >= 1, got 0");
+  EXPECT_STREQ(e.what(), "a.json: solver.substeps: must be >= 1, got 0");
+  EXPECT_EQ(e.file(), "a.json");
+  EXPECT_EQ(e.json_path(), "solver.substeps");
+  EXPECT_EQ(e.problem(), "must be >= 1, got 0");
+}
+
+// ---- The embedded default scene --------------------------------------------------------------
+
+TEST(DefaultScene, ParsesAndValidates) {
+  ASSERT_FALSE(default_scene_json().empty());
+  const SceneDef s = load_scene_text(default_scene_json(), "<default scene>");
+  EXPECT_FALSE(s.fluids.empty());
+  EXPECT_GT(s.fluids[0].spacing, 0.0f);
+}
+
+TEST(DefaultScene, MatchesScenesDamBreakJson) {
+  const fs::path file = repository_root() / "scenes" / "dam_break.json";
+  ASSERT_TRUE(fs::exists(file)) << file;
+  EXPECT_EQ(default_scene_json(), read_text(file));
+}
+
+// docs/scene-format.md documents the format with one full example; it must stay a valid scene.
+TEST(SceneFormatDoc, ExampleIsAValidScene) {
+  const fs::path doc = repository_root() / "docs" / "scene-format.md";
+  ASSERT_TRUE(fs::exists(doc)) << doc;
+  const std::string text = read_text(doc);
+  const std::string open = "```json\n";
+  const auto begin = text.find(open);
+  ASSERT_NE(begin, std::string::npos);
+  const auto end = text.find("```", begin + open.size());
+  ASSERT_NE(end, std::string::npos);
+  const SceneDef s = load_scene_text(std::string_view(text).substr(begin + open.size(), end - begin - open.size()),
+                                     doc.string());
+  EXPECT_EQ(s.fluids.size(), 1u);
+  EXPECT_EQ(s.particles.size(), 2u);
+  EXPECT_EQ(s.distance_constraints.size(), 1u);
+  EXPECT_EQ(s.colliders.size(), 3u);
+  // The example writes the solver defaults (frame_dt rounded to 0.0166667).
+  SolverDef defaults;
+  EXPECT_NEAR(s.solver.frame_dt, defaults.frame_dt, 1e-6);
+  defaults.frame_dt = s.solver.frame_dt;
+  expect_same(s.solver, defaults);
+}
+
+}  // namespace
+}  // namespace seiche
