@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include <tbb/parallel_for.h>
+
 #include "blocked_reduce.hpp"
 #include "distance_solver.hpp"
 #include "fluid_solver.hpp"
@@ -51,7 +53,14 @@ kernels::CollisionShape to_shape(const ColliderDef& c) {
 }  // namespace
 
 Simulation::Simulation(const SceneDef& scene) : scene_(scene) {
-  // ---- Particles: raw particles first (their index is the scene's index), then fluid blocks.
+  create_particles();
+  create_distance_constraints();
+  create_colliders();
+  assemble_pipeline();
+}
+
+// Raw particles first (their index is the scene's index), then the fluid blocks' lattices.
+void Simulation::create_particles() {
   std::size_t fluid_count = 0;
   for (const FluidDef& f : scene_.fluids) {
     const auto n = lattice_counts(f);
@@ -95,8 +104,9 @@ Simulation::Simulation(const SceneDef& scene) : scene_(scene) {
     store_.id[k] = std::int32_t(k);
     store_.px[k] = store_.x[k], store_.py[k] = store_.y[k], store_.pz[k] = store_.z[k];
   }
+}
 
-  // ---- Raw distance constraints.
+void Simulation::create_distance_constraints() {
   if (!scene_.distance_constraints.empty()) {
     std::vector<std::uint32_t> ci, cj;
     std::vector<float> rest, compliance;
@@ -109,8 +119,10 @@ Simulation::Simulation(const SceneDef& scene) : scene_(scene) {
     distance_ = std::make_unique<DistanceSolver>(ci, cj, rest, compliance, view());
     index_remappers_.push_back([this](std::span<const std::uint32_t> m) { distance_->remap(m); });
   }
+}
 
-  // ---- Collisions: the domain always, plus the scene's colliders.
+// The domain always, plus the scene's colliders.
+void Simulation::create_colliders() {
   collision_params_ = std::make_unique<kernels::CollisionParams>();
   for (int a = 0; a < 3; ++a) {
     collision_params_->domain_min[a] = scene_.domain.min[a];
@@ -119,8 +131,10 @@ Simulation::Simulation(const SceneDef& scene) : scene_(scene) {
   collision_params_->domain_friction = scene_.domain.friction;
   collision_params_->fluid_radius = fluid_ ? fluid_->particle_radius() : 0.0f;
   for (const ColliderDef& c : scene_.colliders) colliders_.push_back(to_shape(c));
+}
 
-  // ---- The pipeline: only what this scene needs.
+// Only what this scene needs: a pass whose material or coefficient is absent is not built.
+void Simulation::assemble_pipeline() {
   if (distance_) {
     begin_substep_passes_.push_back({"distance", [this](const StepContext&) { distance_->begin_substep(); }});
   }
@@ -190,8 +204,10 @@ void Simulation::find_neighbors() {
   Neighborhood& nb = *neighborhood_;
   const std::size_t n = store_.size();
   nb.in_grid.resize(n);
-  for (std::size_t i = 0; i < n; ++i)
-    nb.in_grid[i] = phase_material(store_.phase[i]) == Material::Fluid ? 1 : 0;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 16384), [&](const auto& r) {
+    for (std::size_t i = r.begin(); i != r.end(); ++i)
+      nb.in_grid[i] = phase_material(store_.phase[i]) == Material::Fluid ? 1 : 0;
+  });
   nb.grid.build(nb.spec, store_.px.data(), store_.py.data(), store_.pz.data(), nb.in_grid.data(), n);
   reorder(nb.grid.order());
   neighbor::build_neighbor_list(nb.grid, store_.px.data(), store_.py.data(), store_.pz.data(),

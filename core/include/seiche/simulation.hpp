@@ -65,6 +65,11 @@ class Simulation {
     std::function<void(const StepContext&)> run;
   };
 
+  void create_particles();
+  void create_distance_constraints();
+  void create_colliders();
+  void assemble_pipeline();
+
   void substep(StepContext& ctx);
   void find_neighbors();
   /// Reorders the store (new k = old order[k]) and remaps every index held elsewhere.
