@@ -10,7 +10,8 @@
 
 namespace seiche {
 
-FluidSolver::FluidSolver(const FluidDef& material, const SolverDef& solver, ParticleStore& store,
+FluidSolver::FluidSolver(const FluidDef& material, const SolverDef& solver,
+                         const DomainDef& domain, ParticleStore& store,
                          const Neighborhood& neighborhood)
     : store_(store), neighborhood_(neighborhood) {
   const float s = material.spacing;
@@ -24,6 +25,8 @@ FluidSolver::FluidSolver(const FluidDef& material, const SolverDef& solver, Part
   params_.tensile_k = solver.tensile_k;
   params_.tensile_n = solver.tensile_n;
   params_.tensile_dq = solver.tensile_dq;
+  params_.walls = true;
+  for (int a = 0; a < 3; ++a) params_.wall_min[a] = domain.min[a], params_.wall_max[a] = domain.max[a];
   particle_radius_ = 0.5f * s;
   viscosity_ = material.viscosity;
   vorticity_ = material.vorticity;

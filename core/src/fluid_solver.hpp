@@ -15,8 +15,9 @@ namespace seiche {
 
 class FluidSolver {
  public:
-  FluidSolver(const FluidDef& material, const SolverDef& solver, ParticleStore& store,
-              const Neighborhood& neighborhood);
+  /// The domain's walls lend density to the particles next to them (pbf_walls.hpp).
+  FluidSolver(const FluidDef& material, const SolverDef& solver, const DomainDef& domain,
+              ParticleStore& store, const Neighborhood& neighborhood);
 
   float kernel_radius() const { return params_.h; }
   float particle_mass() const { return params_.mass; }

@@ -77,7 +77,8 @@ void Simulation::create_particles() {
   }
   if (!scene_.fluids.empty()) {
     neighborhood_ = std::make_unique<Neighborhood>();
-    fluid_ = std::make_unique<FluidSolver>(scene_.fluids[0], scene_.solver, store_, *neighborhood_);
+    fluid_ = std::make_unique<FluidSolver>(scene_.fluids[0], scene_.solver, scene_.domain, store_,
+                                           *neighborhood_);
     neighborhood_->radius = fluid_->kernel_radius();
     std::size_t k = raw_count;
     for (std::size_t b = 0; b < scene_.fluids.size(); ++b) {

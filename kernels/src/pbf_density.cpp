@@ -4,6 +4,7 @@
 
 #include <tbb/parallel_for.h>
 
+#include "seiche/kernels/pbf_walls.hpp"
 #include "simd.hpp"
 
 namespace seiche::kernels {
@@ -12,8 +13,9 @@ using namespace simd;
 
 namespace {
 
-constexpr std::size_t kGrain = 256;
+constexpr std::size_t kGrain = 256 / kLanes;  // groups of kLanes particles
 constexpr float kCoincident = 1e-12f;  // r^2 below this * h^2: no gradient direction
+constexpr std::size_t kPrefetchGroups = 4;   // neighbor lists prefetched this many groups ahead
 
 // Scalar parameters derived once per call.
 struct Derived {
@@ -28,31 +30,94 @@ struct Derived {
   }
 };
 
-float integer_power(float x, int n) {
+float integer_power(float x, int n) {  // n >= 1 (the scalar reference)
   float r = x;
   for (int k = 1; k < n; ++k) r *= x;
   return r;
 }
-Floats integer_power(const Floats& x, int n) {
-  Floats r = x;
-  for (int k = 1; k < n; ++k) r *= x;
-  return r;
+template <int N, class T>
+T integer_power(const T& x) {  // N >= 1, by repeated squaring
+  if constexpr (N == 1) {
+    return x;
+  } else {
+    const T half = integer_power<N / 2>(x);
+    if constexpr (N % 2 == 0) return half * half;
+    else return half * half * x;
+  }
 }
 
-// The spiky gradient factor dW/dr / r and the poly6 value for one batch of neighbor offsets.
+// Per-pair kernel terms without their coefficients (applied once per particle at the end):
+//   grad = (h - r)^2 / r    spiky dW/dr / r = spiky_coeff * grad; 0 outside (0, h) and for
+//                           coincident particles (no direction)
+//   s    = max(h^2 - r^2, 0) poly6 W = poly6_coeff * s^3
+template <class T>
 struct PairTerms {
-  Floats grad_over_r, w;
+  T grad, s;
 };
-inline PairTerms pair_terms(const SphKernel& k, const Floats& r2, const Mask& valid) {
-  const Floats h2(k.h2);
-  const Mask in_range = valid & (r2 < h2);
-  const Mask has_direction = in_range & (r2 > Floats(kCoincident * k.h2));
-  const Floats r = xsimd::sqrt(xsimd::max(r2, Floats(kCoincident * k.h2)));
-  const Floats t = Floats(k.h) - r;
-  const Floats grad = Floats(k.spiky_coeff) * t * t / r;
-  const Floats s = xsimd::max(h2 - r2, Floats(0.0f));
-  return {xsimd::select(has_direction, grad, Floats(0.0f)),
-          xsimd::select(in_range, s * s * s, Floats(0.0f))};  // poly6 without its coefficient
+struct PairConstants {
+  Floats h, h2, r2_min, far, half, three_halves, zero;
+  explicit PairConstants(const SphKernel& k)
+      : h(k.h), h2(k.h2), r2_min(kCoincident * k.h2), far(4.0f * k.h2), half(0.5f),
+        three_halves(1.5f), zero(0.0f) {}
+};
+template <class T>
+SEICHE_INLINE inline PairTerms<T> pair_terms(const PairConstants& c, const T& r2) {
+  // 1/r from the hardware estimate refined by one Newton step (relative error ~1e-7): no sqrt,
+  // no division in the inner loop. r = r2 y corr, 1/r = y corr.
+  const T r2_safe = vmax(r2, c.r2_min);
+  const T y = vrsqrt(r2_safe);
+  const T ry = r2_safe * y;
+  const T corr = mul_sub_from(ry * y, c.half, c.three_halves);
+  const T inv_r = y * corr;
+  const T t = vmax(mul_sub_from(ry, corr, c.h), c.zero);  // h - r, 0 past h
+  return {keep_if(r2 > c.r2_min, t * t * inv_r), vmax(c.h2 - r2, c.zero)};
+}
+
+// Offsets and squared distance from the group's particles to their slot neighbors; lanes past
+// their list (masked) get r^2 = 4 h^2, where every kernel term is 0.
+template <class T>
+struct PairGeometry {
+  T dx, dy, dz, r2;
+};
+template <class Masked>
+SEICHE_INLINE inline PairGeometry<Floats> pair_geometry(const PairConstants& c, const Gathered4& pi,
+                                                        const Gathered4& pj, Masked,
+                                                        const Mask& valid) {
+  const Floats dx = pi.x - pj.x, dy = pi.y - pj.y, dz = pi.z - pj.z;
+  Floats r2 = xsimd::fma(dz, dz, xsimd::fma(dy, dy, dx * dx));
+  if constexpr (Masked::value) r2 = xsimd::select(valid, r2, c.far);
+  return {dx, dy, dz, r2};
+}
+
+// The domain walls' share of a particle's density and its gradient (pbf_walls.hpp), for floats
+// and for batches: fraction sums f over the six walls, g = sum of f'(d) n.
+template <class T>
+struct WallSum {
+  T fraction, gx, gy, gz;
+};
+template <class T, class Max, class Min>
+SEICHE_INLINE inline WallSum<T> domain_walls(const PbfParams& prm, const T& x, const T& y,
+                                             const T& z, Max max_fn, Min min_fn) {
+  WallSum<T> sum{T(0.0f), T(0.0f), T(0.0f), T(0.0f)};
+  const T* p[3] = {&x, &y, &z};
+  T* g[3] = {&sum.gx, &sum.gy, &sum.gz};
+  for (int a = 0; a < 3; ++a) {
+    const auto lo = wall_term<T>(*p[a] - T(prm.wall_min[a]), prm.h, max_fn, min_fn);  // n = +e_a
+    const auto hi = wall_term<T>(T(prm.wall_max[a]) - *p[a], prm.h, max_fn, min_fn);  // n = -e_a
+    sum.fraction += lo.fraction + hi.fraction;
+    *g[a] += lo.slope - hi.slope;
+  }
+  return sum;
+}
+inline WallSum<Floats> domain_walls(const PbfParams& prm, const Gathered4& p) {
+  return domain_walls<Floats>(
+      prm, p.x, p.y, p.z, [](const Floats& a, const Floats& b) { return xsimd::max(a, b); },
+      [](const Floats& a, const Floats& b) { return xsimd::min(a, b); });
+}
+inline WallSum<float> domain_walls(const PbfParams& prm, const Float4& p) {
+  return domain_walls<float>(
+      prm, p.x, p.y, p.z, [](float a, float b) { return std::max(a, b); },
+      [](float a, float b) { return std::min(a, b); });
 }
 
 }  // namespace
@@ -88,71 +153,103 @@ double lattice_lambda_denominator(float spacing, float h) {
 void pbf_density_lambda(const Float4* pos, NeighborSpan nbr, std::size_t n, const PbfParams& prm,
                         float* density, float* lambda) {
   const Derived d(prm);
-  const float self_w = d.kernel.h2 * d.kernel.h2 * d.kernel.h2;
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kGrain), [&](const auto& range) {
-    const Floats lanes = lane_index();
-    for (std::size_t i = range.begin(); i != range.end(); ++i) {
-      const std::uint32_t begin = nbr.offsets[i], count = nbr.offsets[i + 1] - begin;
-      const std::uint32_t* list = nbr.indices + begin;
-      const Floats xi(pos[i].x), yi(pos[i].y), zi(pos[i].z);
+  const float self_s3 = d.kernel.h2 * d.kernel.h2 * d.kernel.h2;
+  const float rho_scale = prm.mass * d.kernel.poly6_coeff;
+  const float grad_scale = d.volume * d.kernel.spiky_coeff;  // V spiky_coeff
+  const std::size_t groups = (n + kLanes - 1) / kLanes;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, groups, kGrain), [&](const auto& range) {
+    const PairConstants c(d.kernel);
+    for (std::size_t g = range.begin(); g != range.end(); ++g) {
+      prefetch_lists(nbr, (g + kPrefetchGroups) * kLanes, (g + kPrefetchGroups + 1) * kLanes, n);
+      const NeighborGroup group(nbr, g * kLanes, n);
+      const Gathered4 pi = group.own(pos);
       Floats w_sum(0.0f), gx(0.0f), gy(0.0f), gz(0.0f), g2(0.0f);
-      for (std::size_t k = 0; k < count; k += kLanes) {
-        const Mask valid = lanes < Floats(float(count - k));
-        const Gathered4 pj = gather4(pos, load_indices(list, count, k, std::int32_t(i)));
-        const Floats dx = xi - pj.x, dy = yi - pj.y, dz = zi - pj.z;
-        const Floats r2 = dx * dx + dy * dy + dz * dz;
-        const PairTerms t = pair_terms(d.kernel, r2, valid);
-        w_sum += t.w;
-        gx += t.grad_over_r * dx;
-        gy += t.grad_over_r * dy;
-        gz += t.grad_over_r * dz;
-        g2 += t.grad_over_r * t.grad_over_r * r2;
+      for_each_slot(group, pos, [&](const Gathered4& pj, auto masked, const Mask& valid)
+                                    SEICHE_INLINE {
+        const auto q = pair_geometry(c, pi, pj, masked, valid);
+        const auto t = pair_terms(c, q.r2);
+        accumulate(w_sum, t.s * t.s, t.s);
+        accumulate(gx, t.grad, q.dx);
+        accumulate(gy, t.grad, q.dy);
+        accumulate(gz, t.grad, q.dz);
+        accumulate(g2, t.grad * t.grad, q.r2);
+      });
+      Floats rho = Floats(rho_scale) * (Floats(self_s3) + w_sum);
+      Floats sx = Floats(grad_scale) * gx, sy = Floats(grad_scale) * gy, sz = Floats(grad_scale) * gz;
+      if (prm.walls) {
+        const WallSum<Floats> wall = domain_walls(prm, pi);
+        rho += Floats(prm.rest_density) * wall.fraction;
+        sx += wall.gx, sy += wall.gy, sz += wall.gz;
       }
-      const float rho = prm.mass * d.kernel.poly6_coeff * (self_w + xsimd::hadd(w_sum));
-      const float C = std::max(rho / prm.rest_density - 1.0f, 0.0f);
-      const float sx = d.volume * xsimd::hadd(gx), sy = d.volume * xsimd::hadd(gy),
-                  sz = d.volume * xsimd::hadd(gz);
-      const float denom = sx * sx + sy * sy + sz * sz +
-                          d.volume * d.volume * xsimd::hadd(g2) + prm.epsilon;
-      density[i] = rho;
-      lambda[i] = denom > 0.0f ? -C / denom : 0.0f;
+      const Floats C = xsimd::max(rho / Floats(prm.rest_density) - Floats(1.0f), Floats(0.0f));
+      const Floats denom = sx * sx + sy * sy + sz * sz +
+                           Floats(grad_scale * grad_scale) * g2 + Floats(prm.epsilon);
+      group.store(density, rho);
+      group.store(lambda, xsimd::select(denom > Floats(0.0f), -C / denom, Floats(0.0f)));
     }
   });
 }
 
-void pbf_apply_correction(const Float4* pos_lambda, NeighborSpan nbr, std::size_t n,
-                          const PbfParams& prm, float* px, float* py, float* pz) {
+namespace {
+
+// Pass 2 with the artificial-pressure exponent N fixed at compile time (N = 0: no s_corr).
+template <int N>
+void apply_correction(const Float4* pos_lambda, NeighborSpan nbr, std::size_t n,
+                      const PbfParams& prm, float* px, float* py, float* pz) {
   const Derived d(prm);
-  const bool tensile = prm.tensile_k > 0.0f && d.inv_w_dq > 0.0f;
+  const float grad_scale = d.volume * d.kernel.spiky_coeff;
   const float w_scale = d.kernel.poly6_coeff * d.inv_w_dq;  // W(r) / W(dq) = s^3 * this
   const float tensile_k = prm.tensile_k * prm.lambda_scale;
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kGrain), [&](const auto& range) {
-    const Floats lanes = lane_index();
-    for (std::size_t i = range.begin(); i != range.end(); ++i) {
-      const std::uint32_t begin = nbr.offsets[i], count = nbr.offsets[i + 1] - begin;
-      const std::uint32_t* list = nbr.indices + begin;
-      const Float4 pi = pos_lambda[i];
-      const Floats xi(pi.x), yi(pi.y), zi(pi.z), lambda_i(pi.w);
+  const std::size_t groups = (n + kLanes - 1) / kLanes;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, groups, kGrain), [&](const auto& range) {
+    const PairConstants c(d.kernel);
+    const Floats w_scale_b(w_scale), tensile_k_b(tensile_k);
+    for (std::size_t g = range.begin(); g != range.end(); ++g) {
+      prefetch_lists(nbr, (g + kPrefetchGroups) * kLanes, (g + kPrefetchGroups + 1) * kLanes, n);
+      const NeighborGroup group(nbr, g * kLanes, n);
+      const Gathered4 pi = group.own(pos_lambda);
       Floats sx(0.0f), sy(0.0f), sz(0.0f);
-      for (std::size_t k = 0; k < count; k += kLanes) {
-        const Mask valid = lanes < Floats(float(count - k));
-        const Gathered4 pj = gather4(pos_lambda, load_indices(list, count, k, std::int32_t(i)));
-        const Floats dx = xi - pj.x, dy = yi - pj.y, dz = zi - pj.z;
-        const Floats r2 = dx * dx + dy * dy + dz * dz;
-        const PairTerms t = pair_terms(d.kernel, r2, valid);
-        Floats scale = lambda_i + pj.w;
-        if (tensile)
-          scale -= Floats(tensile_k) * integer_power(t.w * Floats(w_scale), prm.tensile_n);
-        const Floats f = scale * t.grad_over_r;
-        sx += f * dx;
-        sy += f * dy;
-        sz += f * dz;
+      for_each_slot(group, pos_lambda, [&](const Gathered4& pj, auto masked, const Mask& valid)
+                                           SEICHE_INLINE {
+        const auto q = pair_geometry(c, pi, pj, masked, valid);
+        const auto t = pair_terms(c, q.r2);
+        Floats scale = pi.w + pj.w;
+        if constexpr (N > 0)
+          scale = mul_sub_from(tensile_k_b, integer_power<N>(t.s * t.s * t.s * w_scale_b), scale);
+        const Floats f = scale * t.grad;
+        accumulate(sx, f, q.dx);
+        accumulate(sy, f, q.dy);
+        accumulate(sz, f, q.dz);
+      });
+      sx *= Floats(grad_scale), sy *= Floats(grad_scale), sz *= Floats(grad_scale);
+      if (prm.walls) {  // 2 lambda_i f'(d) n: the wall pushes back with the particle's pressure
+        const WallSum<Floats> wall = domain_walls(prm, pi);
+        const Floats push = pi.w;
+        sx += push * wall.gx, sy += push * wall.gy, sz += push * wall.gz;
       }
-      px[i] += d.volume * xsimd::hadd(sx);
-      py[i] += d.volume * xsimd::hadd(sy);
-      pz[i] += d.volume * xsimd::hadd(sz);
+      group.store(px, group.load(px) + sx);
+      group.store(py, group.load(py) + sy);
+      group.store(pz, group.load(pz) + sz);
     }
   });
+}
+
+}  // namespace
+
+void pbf_apply_correction(const Float4* pos_lambda, NeighborSpan nbr, std::size_t n,
+                          const PbfParams& prm, float* px, float* py, float* pz) {
+  const bool tensile = prm.tensile_k > 0.0f && Derived(prm).inv_w_dq > 0.0f;
+  switch (tensile ? prm.tensile_n : 0) {
+    case 0: return apply_correction<0>(pos_lambda, nbr, n, prm, px, py, pz);
+    case 1: return apply_correction<1>(pos_lambda, nbr, n, prm, px, py, pz);
+    case 2: return apply_correction<2>(pos_lambda, nbr, n, prm, px, py, pz);
+    case 3: return apply_correction<3>(pos_lambda, nbr, n, prm, px, py, pz);
+    case 4: return apply_correction<4>(pos_lambda, nbr, n, prm, px, py, pz);
+    case 5: return apply_correction<5>(pos_lambda, nbr, n, prm, px, py, pz);
+    case 6: return apply_correction<6>(pos_lambda, nbr, n, prm, px, py, pz);
+    case 7: return apply_correction<7>(pos_lambda, nbr, n, prm, px, py, pz);
+    default: return apply_correction<8>(pos_lambda, nbr, n, prm, px, py, pz);
+  }
 }
 
 void pbf_density_lambda_reference(const Float4* pos, NeighborSpan nbr, std::size_t n,
@@ -171,10 +268,16 @@ void pbf_density_lambda_reference(const Float4* pos, NeighborSpan nbr, std::size
       gz += g * dz;
       g2 += double(g) * g * r2;
     }
-    const double rho = prm.mass * w_sum;
-    const double C = std::max(rho / prm.rest_density - 1.0, 0.0);
+    double rho = prm.mass * w_sum;
     const double V = d.volume;
-    const double denom = V * V * (gx * gx + gy * gy + gz * gz + g2) + prm.epsilon;
+    double sx = V * gx, sy = V * gy, sz = V * gz;
+    if (prm.walls) {
+      const WallSum<float> wall = domain_walls(prm, pos[i]);
+      rho += double(prm.rest_density) * wall.fraction;
+      sx += wall.gx, sy += wall.gy, sz += wall.gz;
+    }
+    const double C = std::max(rho / prm.rest_density - 1.0, 0.0);
+    const double denom = sx * sx + sy * sy + sz * sz + V * V * g2 + prm.epsilon;
     density[i] = float(rho);
     lambda[i] = denom > 0.0 ? float(-C / denom) : 0.0f;
   }
@@ -199,9 +302,15 @@ void pbf_apply_correction_reference(const Float4* pos_lambda, NeighborSpan nbr, 
       sy += f * dy;
       sz += f * dz;
     }
-    px[i] += float(d.volume * sx);
-    py[i] += float(d.volume * sy);
-    pz[i] += float(d.volume * sz);
+    sx *= d.volume, sy *= d.volume, sz *= d.volume;
+    if (prm.walls) {
+      const WallSum<float> wall = domain_walls(prm, pi);
+      const double push = pi.w;
+      sx += push * wall.gx, sy += push * wall.gy, sz += push * wall.gz;
+    }
+    px[i] += float(sx);
+    py[i] += float(sy);
+    pz[i] += float(sz);
   }
 }
 

@@ -13,29 +13,34 @@ void xsph_viscosity(const Float4* pos, const Float4* vel_volume, NeighborSpan nb
                     float h, float c, float* vx, float* vy, float* vz) {
   const SphKernel kernel(h);
   const float scale = c * kernel.poly6_coeff;
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const auto& range) {
-    const Floats lanes = lane_index();
-    for (std::size_t i = range.begin(); i != range.end(); ++i) {
-      const std::uint32_t begin = nbr.offsets[i], count = nbr.offsets[i + 1] - begin;
-      const std::uint32_t* list = nbr.indices + begin;
-      const Floats xi(pos[i].x), yi(pos[i].y), zi(pos[i].z);
-      const Float4 vi = vel_volume[i];
+  const std::size_t groups = (n + kLanes - 1) / kLanes;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, groups, 256 / kLanes), [&](const auto& range) {
+    const Floats h2(kernel.h2), zero(0.0f);
+    for (std::size_t g = range.begin(); g != range.end(); ++g) {
+      const NeighborGroup group(nbr, g * kLanes, n);
+      const Gathered4 pi = group.own(pos), vi = group.own(vel_volume);
       Floats ax(0.0f), ay(0.0f), az(0.0f);
-      for (std::size_t k = 0; k < count; k += kLanes) {
-        const Mask valid = lanes < Floats(float(count - k));
-        const Ints index = load_indices(list, count, k, std::int32_t(i));
-        const Gathered4 pj = gather4(pos, index);
-        const Gathered4 vj = gather4(vel_volume, index);
-        const Floats dx = xi - pj.x, dy = yi - pj.y, dz = zi - pj.z;
-        const Floats s = xsimd::max(Floats(kernel.h2) - (dx * dx + dy * dy + dz * dz), Floats(0.0f));
-        const Floats weight = xsimd::select(valid, vj.w * s * s * s, Floats(0.0f));
-        ax += weight * (vj.x - Floats(vi.x));
-        ay += weight * (vj.y - Floats(vi.y));
-        az += weight * (vj.z - Floats(vi.z));
-      }
-      vx[i] = vi.x + scale * xsimd::hadd(ax);
-      vy[i] = vi.y + scale * xsimd::hadd(ay);
-      vz[i] = vi.z + scale * xsimd::hadd(az);
+      std::uint32_t k = 0;
+      // Lane = particle: slot k holds the k-th neighbor of each of the group's particles.
+      auto slot = [&](const auto& neighbor, auto masked, const Mask& valid) SEICHE_INLINE {
+        const Gathered4 pj = gather4(pos, neighbor), vj = gather4(vel_volume, neighbor);
+        const Floats dx = pi.x - pj.x, dy = pi.y - pj.y, dz = pi.z - pj.z;
+        Floats s = xsimd::max(h2 - xsimd::fma(dz, dz, xsimd::fma(dy, dy, dx * dx)), zero);
+        if constexpr (decltype(masked)::value) s = xsimd::select(valid, s, zero);
+        const Floats weight = vj.w * (s * s * s);
+        ax = xsimd::fma(weight, vj.x - vi.x, ax);
+        ay = xsimd::fma(weight, vj.y - vi.y, ay);
+        az = xsimd::fma(weight, vj.z - vi.z, az);
+      };
+      const Mask all(true);
+      for (; k < group.kmin; ++k)
+        slot([&](std::size_t l) { return group.neighbor(l, k); }, std::false_type{}, all);
+      for (; k < group.kmax; ++k)
+        slot([&](std::size_t l) { return group.neighbor_clamped(l, k); }, std::true_type{},
+             Floats(float(k)) < group.count);
+      group.store(vx, vi.x + Floats(scale) * ax);
+      group.store(vy, vi.y + Floats(scale) * ay);
+      group.store(vz, vi.z + Floats(scale) * az);
     }
   });
 }

@@ -2,7 +2,8 @@
 // passes over the fluid particles (sorted by cell; neighbors from a CSR list, self excluded).
 //
 // With V = m / rho0 the rest volume of a particle and W, grad W the kernels of sph_kernels.hpp:
-//   density      rho_i = m (W(0) + sum_j W(|p_i - p_j|))
+//   density      rho_i = m (W(0) + sum_j W(|p_i - p_j|)) + rho0 f_walls(p_i)
+//                (f_walls, its gradient and its push in dp_i: see pbf_walls.hpp)
 //   constraint   C_i = max(rho_i / rho0 - 1, 0)           (unilateral: no pull at free surfaces)
 //   gradients    grad_{p_i} C_i = V sum_j grad W_ij,       grad_{p_j} C_i = -V grad W_ij
 //   lambda       lambda_i = -C_i / (sum_k |grad_{p_k} C_i|^2 + eps)
@@ -15,9 +16,10 @@
 //
 // Pass 1 reads packed positions (x, y, z, -) and writes density and lambda; pass 2 reads packed
 // positions with lambda in w and adds dp_i to the predicted positions px, py, pz (which are not
-// read by either pass, so the iteration is a true Jacobi step). Vectorized across the
-// neighbors of one particle (lane = neighbor, gathered), parallel across particles; every
-// particle's sums run in a fixed order, so results do not depend on the thread count.
+// read by either pass, so the iteration is a true Jacobi step). Vectorized across particles
+// (lane = particle: a batch holds consecutive particles and step k visits the k-th neighbor of
+// each, records gathered with 16-byte loads), parallel across batches; every particle's sums
+// run in neighbor-list order in its own lane, so results do not depend on the thread count.
 #pragma once
 
 #include <cstddef>
@@ -34,7 +36,12 @@ struct PbfParams {
   float epsilon = 0.0f;      ///< absolute constraint force mixing term (1/m^2)
   float lambda_scale = 1.0f; ///< 1 / D0 (m^2): the unit of s_corr
   float tensile_k = 0.0f;    ///< 0 = no artificial pressure
-  int tensile_n = 4;
+  int tensile_n = 4;          ///< 1..8
+  /// Axis-aligned walls (the domain box) that lend density to particles within h of them
+  /// (pbf_walls.hpp); off: particles at walls see only their fluid neighbors.
+  bool walls = false;
+  float wall_min[3] = {0, 0, 0};
+  float wall_max[3] = {0, 0, 0};
   float tensile_dq = 0.2f;   ///< fraction of h
 };
 
