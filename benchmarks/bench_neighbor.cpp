@@ -7,6 +7,12 @@
 //   BM_rebuild_and_query_moving: particles move by up to 0.1 s per step, back and forth, so a few
 //     percent change cell every step (the grid's general path: atomic counting sort).
 // Args: cube side, TBB threads.
+//   BM_small_scenes: the sizes a simulation substep sees, where fixed overheads matter.
+//     scene 0: 6750 particles, a 15 x 30 x 15 lattice, s = 0.02, h = 0.04, in the box
+//              [0, 0.3] x [0, 1] x [0, 0.3] grown by h.
+//     scene 1: 50,653 particles, a 37^3 lattice, s = 0.027, h = 0.054, in a 4 x 3 x 1.5 box grown
+//              by h (mostly empty: the fluid fills 1/18 of it).
+//   Args: scene, TBB threads; both the static and the moving variant.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -32,23 +38,39 @@ struct Cloud {
   std::vector<float> p[3];  // x, y, z
   std::vector<float> v[3];  // per-step displacement (moving case)
   float box_min[3] = {0, 0, 0}, box_max[3];
+  float radius = kRadius;
 };
 
-Cloud jittered_cube(int side) {
+// nx x ny x nz lattice at (i + 0.5) s, jittered by +-1% of s; box = the lattice's bounds.
+Cloud jittered_lattice(int nx, int ny, int nz, float s) {
   Cloud c;
   std::mt19937 rng(20240611u);
-  std::uniform_real_distribution<float> jitter(-0.01f * kSpacing, 0.01f * kSpacing);
-  std::uniform_real_distribution<float> step(-0.1f * kSpacing, 0.1f * kSpacing);
-  for (int k = 0; k < side; ++k)
-    for (int j = 0; j < side; ++j)
-      for (int i = 0; i < side; ++i) {
+  std::uniform_real_distribution<float> jitter(-0.01f * s, 0.01f * s);
+  std::uniform_real_distribution<float> step(-0.1f * s, 0.1f * s);
+  for (int k = 0; k < nz; ++k)
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i) {
         const int ijk[3] = {i, j, k};
         for (int a = 0; a < 3; ++a) {
-          c.p[a].push_back((float(ijk[a]) + 0.5f) * kSpacing + jitter(rng));
+          c.p[a].push_back((float(ijk[a]) + 0.5f) * s + jitter(rng));
           c.v[a].push_back(step(rng));
         }
       }
-  for (float& b : c.box_max) b = float(side) * kSpacing;
+  const int dims[3] = {nx, ny, nz};
+  for (int a = 0; a < 3; ++a) c.box_max[a] = float(dims[a]) * s;
+  c.radius = 2 * s;
+  return c;
+}
+
+Cloud jittered_cube(int side) { return jittered_lattice(side, side, side, kSpacing); }
+
+// The small scenes of BM_small_scenes (see the top of the file).
+Cloud small_scene(int scene) {
+  const float h = scene == 0 ? 0.04f : 0.054f;
+  Cloud c = scene == 0 ? jittered_lattice(15, 30, 15, 0.02f) : jittered_lattice(37, 37, 37, 0.027f);
+  const float box[2][3] = {{0.3f, 1.0f, 0.3f}, {4.0f, 3.0f, 1.5f}};
+  for (int a = 0; a < 3; ++a) c.box_min[a] = -h, c.box_max[a] = box[scene][a] + h;
+  c.radius = h;
   return c;
 }
 
@@ -71,19 +93,18 @@ struct Search {
   std::vector<float> scratch;
 
   void step(Cloud& c, bool moving) {
-    const nb::GridSpec spec = nb::make_grid_spec(c.box_min, c.box_max, kRadius);
+    const nb::GridSpec spec = nb::make_grid_spec(c.box_min, c.box_max, c.radius);
     const std::size_t n = c.p[0].size();
     grid.build(spec, c.p[0].data(), c.p[1].data(), c.p[2].data(), nullptr, n);
     apply_order(grid.order(), c.p, 3, scratch);
     if (moving) apply_order(grid.order(), c.v, 3, scratch);
-    nb::build_neighbor_list(grid, c.p[0].data(), c.p[1].data(), c.p[2].data(), n, kRadius, list);
+    nb::build_neighbor_list(grid, c.p[0].data(), c.p[1].data(), c.p[2].data(), n, c.radius, list);
   }
 };
 
-void run(benchmark::State& state, bool moving) {
+void run(benchmark::State& state, Cloud cloud, bool moving) {
   tbb::global_control threads(tbb::global_control::max_allowed_parallelism,
                               std::size_t(state.range(1)));
-  Cloud cloud = jittered_cube(int(state.range(0)));
   const std::size_t n = cloud.p[0].size();
   Search search;
   search.step(cloud, moving);  // the first step sorts the lattice order into cell order
@@ -104,12 +125,15 @@ void run(benchmark::State& state, bool moving) {
     benchmark::ClobberMemory();
   }
   state.counters["B_per_particle"] = double(search.grid.bytes() + search.list.bytes()) / double(n);
+  state.counters["scratch_B_per_particle"] = double(nb::neighbor_list_scratch_bytes()) / double(n);
   state.counters["neighbors_per_particle"] = double(search.list.indices.size()) / double(n);
   state.counters["particles"] = double(n);
 }
 
-void BM_rebuild_and_query(benchmark::State& state) { run(state, false); }
-void BM_rebuild_and_query_moving(benchmark::State& state) { run(state, true); }
+void BM_rebuild_and_query(benchmark::State& state) { run(state, jittered_cube(int(state.range(0))), false); }
+void BM_rebuild_and_query_moving(benchmark::State& state) { run(state, jittered_cube(int(state.range(0))), true); }
+void BM_small_scenes(benchmark::State& state) { run(state, small_scene(int(state.range(0))), false); }
+void BM_small_scenes_moving(benchmark::State& state) { run(state, small_scene(int(state.range(0))), true); }
 
 // Grid build alone on a shuffled input: the worst case of the general (atomic) path.
 void BM_grid_build_shuffled(benchmark::State& state) {
@@ -135,8 +159,16 @@ void sizes(benchmark::internal::Benchmark* b) {
   b->ArgNames({"side", "threads"})->Unit(benchmark::kMillisecond)->UseRealTime();
 }
 
+void scenes(benchmark::internal::Benchmark* b) {
+  for (int scene : {0, 1})
+    for (int threads : {1, 2}) b->Args({scene, threads});
+  b->ArgNames({"scene", "threads"})->Unit(benchmark::kMillisecond)->UseRealTime();
+}
+
 }  // namespace
 
+BENCHMARK(BM_small_scenes)->Apply(scenes);
+BENCHMARK(BM_small_scenes_moving)->Apply(scenes);
 BENCHMARK(BM_rebuild_and_query)->Apply(sizes);
 BENCHMARK(BM_rebuild_and_query_moving)->Apply(sizes);
 BENCHMARK(BM_grid_build_shuffled)->Apply(sizes);

@@ -11,6 +11,7 @@
 #include <limits>
 #include <numeric>
 #include <random>
+#include <thread>
 #include <vector>
 
 #include <tbb/global_control.h>
@@ -282,6 +283,40 @@ TEST(Neighbors, MemoryIsTight) {
   const Result r = run(c, spec_for(0, 1, 0.05f), 0.05f);
   EXPECT_LE(r.list.indices.capacity(), r.list.indices.size() + r.list.indices.size() / 8);
   EXPECT_EQ(r.list.offsets.capacity(), c.size() + 1);
+}
+
+TEST(Neighbors, RepeatedCallsReuseBuffersExactly) {
+  // Lists and scratch keep their storage across calls: a call after a larger or a smaller one,
+  // into the same objects, must give exactly what a fresh call gives.
+  const Cloud big = random_cloud(30000, 0.0f, 1.5f, 16), small = random_cloud(1500, 0.0f, 1.0f, 17);
+  const nb::GridSpec big_spec = spec_for(0, 1.5f, 0.06f), small_spec = spec_for(0, 1, 0.1f);
+  const Result fresh_big = run(big, big_spec, 0.06f), fresh_small = run(small, small_spec, 0.1f);
+  nb::CellGrid grid;
+  nb::NeighborList list;
+  for (int round = 0; round < 2; ++round)
+    for (const auto* c : {&big, &small, &big}) {
+      const bool is_big = c == &big;
+      const Result& fresh = is_big ? fresh_big : fresh_small;
+      grid.build(is_big ? big_spec : small_spec, c->x.data(), c->y.data(), c->z.data(), nullptr, c->size());
+      nb::build_neighbor_list(grid, fresh.sorted.x.data(), fresh.sorted.y.data(), fresh.sorted.z.data(),
+                              c->size(), is_big ? 0.06f : 0.1f, list);
+      EXPECT_EQ(list.offsets, fresh.list.offsets);
+      EXPECT_EQ(list.indices, fresh.list.indices);
+    }
+}
+
+TEST(Neighbors, ConcurrentCallsFromTwoThreads) {
+  // Independent searches may run at the same time (scratch is per call).
+  const Cloud a = random_cloud(20000, 0.0f, 1.0f, 18), b = random_cloud(12000, -1.0f, 0.0f, 19);
+  const Result ra = run(a, spec_for(0, 1, 0.07f), 0.07f), rb = run(b, spec_for(-1, 0, 0.09f), 0.09f);
+  Result ca, cb;
+  std::thread t([&] { for (int k = 0; k < 5; ++k) ca = run(a, spec_for(0, 1, 0.07f), 0.07f); });
+  for (int k = 0; k < 5; ++k) cb = run(b, spec_for(-1, 0, 0.09f), 0.09f);
+  t.join();
+  EXPECT_EQ(ca.list.indices, ra.list.indices);
+  EXPECT_EQ(cb.list.indices, rb.list.indices);
+  EXPECT_EQ(ca.list.offsets, ra.list.offsets);
+  EXPECT_EQ(cb.list.offsets, rb.list.offsets);
 }
 
 TEST(Determinism, OneAndTwoThreadsGiveIdenticalResults) {

@@ -1,23 +1,28 @@
 // Neighbor lists (CSR) from a sorted CellGrid.
 //
-// Candidates. For the 9 (dz, dy) rows around a particle's cell, the cells cx-1..cx+1 of a row are
-// ONE contiguous range of sorted indices (keys are x-fastest), and rows taken in increasing
-// (dz, dy) have increasing indices: scanning them in that order yields each list already sorted.
-// Distance tests run W particles at a time (xsimd batch) over those ranges with unaligned loads
-// of the SoA positions; each lane's result becomes one bit, lanes past the range are masked off.
+// Work is done per group: the particles of one cell that fall in one work block (usually the
+// whole cell). Everything a particle's query needs is shared by its group and computed once:
 //
-// Culling. The 27 cells hold about 8x the true neighbors. When the grid has no more cells than
-// particles, each cell gets the bounding box of its particles, and per query one W-wide test
-// "squared gap to the box < r^2" keeps only the cells that can hold a neighbor; each row is then
-// scanned from its first to its last kept cell. The gap is computed with the same float
-// operations as the distance (differences, squares, left-to-right sum) and rounding is monotonic,
-// so a culled cell provably holds no particle that passes |d|^2 < r^2: culling changes the time,
-// never the result.
+// 1. Rows. For the (2R+1)^2 (dz, dy) rows around the cell (R = 1 when radius <= cell size), the
+//    cells cx-R..cx+R of a row are ONE contiguous range of sorted indices (keys are x-fastest),
+//    and rows taken in increasing (dz, dy) have increasing indices.
+// 2. Culling against the group's box. The group's finite particles have a bounding box; each
+//    candidate of the rows is kept when its squared gap to that box is < r^2 (W candidates at a
+//    time, xsimd batches), and the kept ones are compacted, in row order (so in increasing j),
+//    into a small SoA buffer (x, y, z, j) padded to a multiple of W with +inf positions. The gap
+//    is computed with the same float operations as the distance (differences, squares,
+//    left-to-right sum) and rounding is monotonic, so a culled candidate provably fails
+//    |x_i - x_j|^2 < r^2 for every particle of the group: culling changes the time, never the
+//    result. On a lattice with cells of 2 spacings this keeps ~85 of the ~216 row candidates.
+// 3. Each particle of the group then tests the compacted candidates: a fixed trip count, no
+//    per-particle setup, no tail masks (the padding fails the test), its own index masked out
+//    by comparing j, the passing j packed with one permute and one store per W candidates.
 //
 // Output. Particles are processed in waves of fixed blocks; each block writes its lists to its own
 // scratch buffer, then the wave's offsets are summed in order and the buffers copied into place.
-// One distance pass instead of count-then-fill, a fixed split (deterministic), and scratch memory
-// bounded by one wave whatever the particle count.
+// The result depends on nothing but the input: not on the thread count, not on the block size.
+// Scratch buffers (per block: the compacted candidates and the block's lists) live in a pool
+// that outlives the call, so steady-state calls allocate nothing and zero-fill nothing.
 //
 // Particles with a non-finite coordinate have no neighbors and are no one's neighbor (their
 // distance is inf or NaN, which fails the test); boxes leave them out.
@@ -27,9 +32,13 @@
 #include <array>
 #include <bit>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <limits>
+#include <memory>
+#include <mutex>
 #include <stdexcept>
+#include <utility>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -40,8 +49,7 @@ namespace {
 
 using Batch = xsimd::batch<float>;
 constexpr std::size_t W = Batch::size;
-constexpr std::size_t kGrain = 2048;              // particles per block
-constexpr std::size_t kWave = 16 * kGrain;        // particles per wave (scratch ~ 4 MB)
+constexpr std::size_t kWaveBlocks = 32;  // blocks per wave: bounds the scratch lists
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
 // ---- SIMD glue xsimd 8.1 lacks (batch_bool::mask() and compress arrived in later versions) ----
@@ -62,10 +70,8 @@ inline std::uint32_t lane_bits(const xsimd::batch_bool<float>& b) {
 #endif
 }
 
-// Writes first + (each set lane of bits), in increasing order, to out[0..popcount). The AVX2
-// version stores W slots at once (junk past popcount), out must have room for W: one store and
-// no branch per neighbor instead of a mispredicted branch per neighbor.
 #if XSIMD_WITH_AVX2 && !XSIMD_WITH_AVX512F
+#define SEICHE_NB_AVX2 1
 constexpr std::array<std::uint64_t, 256> kPackLanes = [] {  // set lanes of bits, one byte each
   std::array<std::uint64_t, 256> t{};
   for (unsigned bits = 0; bits < 256; ++bits)
@@ -73,173 +79,313 @@ constexpr std::array<std::uint64_t, 256> kPackLanes = [] {  // set lanes of bits
       if (bits >> l & 1) t[bits] |= std::uint64_t(l) << (8 * k++);
   return t;
 }();
-inline void pack_indices(std::uint32_t first, std::uint32_t bits, std::uint32_t* out) {
-  const __m256i lanes = _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(std::int64_t(kPackLanes[bits])));
-  _mm256_storeu_si256(reinterpret_cast<__m256i*>(out),
-                      _mm256_add_epi32(lanes, _mm256_set1_epi32(std::int32_t(first))));
+inline __m256i pack_lanes(std::uint32_t bits) {
+  return _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(std::int64_t(kPackLanes[bits])));
 }
 #else
-inline void pack_indices(std::uint32_t first, std::uint32_t bits, std::uint32_t* out) {
-  for (; bits != 0; bits &= bits - 1) *out++ = first + std::uint32_t(std::countr_zero(bits));
-}
+#define SEICHE_NB_AVX2 0
 #endif
 
-// ---- Per-cell bounding boxes (SoA, slot = key + 1: one empty slot before, two after) -----------
-
-struct Boxes {
-  std::vector<float> lo[3], hi[3];
+// Growable array without value-initialisation (new T[] of a trivial type leaves it as is); the
+// first `keep` entries survive growth.
+template <class T>
+struct Buf {
+  std::unique_ptr<T[]> p;
+  std::size_t cap = 0;
+  T* data() { return p.get(); }
+  void ensure(std::size_t need, std::size_t keep) {
+    if (need <= cap) return;
+    const std::size_t c = std::max(need, cap + cap / 2);
+    std::unique_ptr<T[]> q(new T[c]);
+    if (keep) std::memcpy(q.get(), p.get(), keep * sizeof(T));
+    p = std::move(q);
+    cap = c;
+  }
+  std::size_t bytes() const { return cap * sizeof(T); }
 };
 
-void compute_boxes(const CellGrid& g, const float* const p[3], Boxes& boxes) {
-  const std::size_t cells = g.spec().cell_count();
-  for (int a = 0; a < 3; ++a) {
-    boxes.lo[a].assign(cells + 3, kInf);
-    boxes.hi[a].assign(cells + 3, -kInf);
-  }
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cells, 4096), [&](const auto& r) {
-    for (std::size_t c = r.begin(); c < r.end(); ++c)
-      for (std::uint32_t j = g.cell_begin(std::uint32_t(c)); j < g.cell_end(std::uint32_t(c)); ++j) {
-        const float q[3] = {p[0][j], p[1][j], p[2][j]};
-        if (!(std::isfinite(q[0]) && std::isfinite(q[1]) && std::isfinite(q[2]))) continue;
-        for (int a = 0; a < 3; ++a) {
-          boxes.lo[a][c + 1] = std::min(boxes.lo[a][c + 1], q[a]);
-          boxes.hi[a][c + 1] = std::max(boxes.hi[a][c + 1], q[a]);
-        }
-      }
-  });
+struct Block {
+  Buf<float> cx, cy, cz;  // compacted candidates of the current group
+  Buf<std::uint32_t> cj;
+  Buf<std::uint32_t> lists;  // the block's lists, back to back
+  std::size_t used = 0;
+  std::size_t bytes() const { return cx.bytes() * 3 + cj.bytes() + lists.bytes(); }
+};
+
+// Pool of per-call scratch: a call takes one (or makes one), returns it at the end. Safe with
+// concurrent or nested calls; steady state reuses the same buffers.
+struct Scratch {
+  Block blocks[kWaveBlocks];
+};
+std::mutex pool_mutex;
+std::vector<std::unique_ptr<Scratch>> pool;
+
+std::unique_ptr<Scratch> take_scratch() {
+  std::lock_guard lock(pool_mutex);
+  if (pool.empty()) return std::make_unique<Scratch>();
+  auto s = std::move(pool.back());
+  pool.pop_back();
+  return s;
+}
+void give_back(std::unique_ptr<Scratch> s) {
+  std::lock_guard lock(pool_mutex);
+  pool.push_back(std::move(s));
 }
 
-// ---- Per-cell stencil and per-particle query ----------------------------------------------------
-
-// What every particle of one cell needs: the row ranges around the cell and, when culling, the
-// boxes of its 27 cells.
-struct Stencil {
-  std::uint32_t begin = 0, end = 0;  // sorted range of the centre cell (empty: none yet)
-  std::int32_t side = 3;             // 2 * reach + 1 cells per row
-  std::vector<std::uint32_t> off;    // per row: side + 1 cell boundaries in sorted order
-  std::uint32_t candidates = 0;      // particles in all rows: a bound on any list
-  bool culled = false;
-  alignas(64) float lo[3][32], hi[3][32];  // culled: boxes of the 27 cells, row-major
-
-  void gather(const CellGrid& g, const std::int32_t c[3], std::int32_t reach, const Boxes* boxes) {
-    const std::int32_t* d = g.spec().dims;
-    side = 2 * reach + 1;
-    culled = boxes != nullptr;
-    const std::size_t rows = std::size_t(side) * side;
-    off.assign(rows * (side + 1), 0);
-    candidates = 0;
-    for (std::int32_t dz = 0; dz < side; ++dz)
-      for (std::int32_t dy = 0; dy < side; ++dy) {
-        const std::size_t row = std::size_t(dz) * side + dy;
-        const std::int32_t zz = c[2] - reach + dz, yy = c[1] - reach + dy;
-        const bool valid = zz >= 0 && zz < d[2] && yy >= 0 && yy < d[1];
-        if (valid) {
-          // Boundary t is the start of cell cx - reach + t clamped to the row; the start of
-          // "cell nx" is the end of the row's last cell.
-          std::uint32_t* o = &off[row * (side + 1)];
-          const std::uint32_t row_key = g.cell_index(0, yy, zz);
-          for (std::int32_t t = 0; t <= side; ++t)
-            o[t] = g.cell_begin(row_key + std::uint32_t(std::clamp(c[0] - reach + t, 0, d[0])));
-          candidates += o[side] - o[0];
-        }
-        if (!culled) continue;
-        // Boxes of cells cx-1..cx+1 (4 floats copied, the 4th is overwritten by the next row).
-        // At the x borders the box belongs to a neighbouring row's cell, harmless: that cell's
-        // sorted range here is empty.
-        const std::size_t slot = valid ? std::size_t(g.cell_index(c[0], yy, zz)) : 0;
-        for (int a = 0; a < 3; ++a) {
-          if (valid) {
-            std::memcpy(&lo[a][3 * row], &boxes->lo[a][slot], 4 * sizeof(float));
-            std::memcpy(&hi[a][3 * row], &boxes->hi[a][slot], 4 * sizeof(float));
-          } else {
-            std::fill_n(&lo[a][3 * row], 3, kInf);
-            std::fill_n(&hi[a][3 * row], 3, -kInf);
-          }
-        }
-      }
-    if (culled)
-      for (int a = 0; a < 3; ++a) std::fill_n(&lo[a][27], 5, kInf), std::fill_n(&hi[a][27], 5, -kInf);
-  }
-
-  // One query: the particle's position broadcast, the squared radius, its list so far.
-  struct Query {
-    const float* const* p;
-    std::size_t n;
-    std::uint32_t i;
-    Batch qx, qy, qz, rr;
-    std::uint32_t* out;
-    std::uint32_t count = 0;
-
-    // Lanes of candidates k..k+W-1 within the radius.
-    template <bool kSafe>
-    std::uint32_t test(std::uint32_t k) const {
-      Batch cx, cy, cz;
-      if (kSafe) {
-        cx = Batch::load_unaligned(p[0] + k);
-        cy = Batch::load_unaligned(p[1] + k);
-        cz = Batch::load_unaligned(p[2] + k);
-      } else {  // the last particles of the arrays: never read past n
-        alignas(64) float t[3][W] = {};
-        for (std::size_t l = 0; k + l < n && l < W; ++l)
-          t[0][l] = p[0][k + l], t[1][l] = p[1][k + l], t[2][l] = p[2][k + l];
-        cx = Batch::load_aligned(t[0]), cy = Batch::load_aligned(t[1]), cz = Batch::load_aligned(t[2]);
-      }
-      const Batch dx = qx - cx, dy = qy - cy, dz = qz - cz;
-      return lane_bits(dx * dx + dy * dy + dz * dz < rr);
-    }
-
-    template <bool kSafe, bool kSelf>
-    void emit(std::uint32_t k, std::uint32_t bits) {
-      if (kSelf && i - k < W) bits &= ~(1u << (i - k));  // unsigned: only when k <= i < k + W
-      pack_indices(k, bits, out + count);
-      count += std::uint32_t(std::popcount(bits));
-    }
-
-    // Candidates [b, e): full batches, then one masked batch for the rest.
-    template <bool kSafe, bool kSelf>
-    void scan(std::uint32_t b, std::uint32_t e) {
-      std::uint32_t k = b;
-      for (; k + W <= e; k += W) emit<kSafe, kSelf>(k, test<kSafe>(k));
-      if (k < e) emit<kSafe, kSelf>(k, test<kSafe>(k) & ((1u << (e - k)) - 1));
-    }
-    void scan(std::uint32_t b, std::uint32_t e, bool self) {
-      if (e + W - 1 <= n)  // the last batch reads up to e + W - 2
-        self ? scan<true, true>(b, e) : scan<true, false>(b, e);
-      else
-        self ? scan<false, true>(b, e) : scan<false, false>(b, e);
-    }
-  };
-
-  // Writes the neighbors of sorted particle i to out (room for candidates + W) and returns
-  // their count.
-  std::uint32_t query(const float* const p[3], std::size_t n, std::uint32_t i, float r2,
-                      std::uint32_t* out) const {
-    if (!(std::isfinite(p[0][i]) && std::isfinite(p[1][i]) && std::isfinite(p[2][i]))) return 0;
-    Query q{p, n, i, Batch(p[0][i]), Batch(p[1][i]), Batch(p[2][i]), Batch(r2), out};
-
-    if (!culled) {
-      const std::size_t rows = std::size_t(side) * side, centre = rows / 2;
-      for (std::size_t r = 0; r < rows; ++r) q.scan(off[r * (side + 1)], off[r * (side + 1) + side], r == centre);
-      return q.count;
-    }
-    std::uint32_t live = 0;  // bit per cell of the 27
-    const Batch zero(0.0f);
-    for (std::size_t c = 0; c < 32; c += W) {
-      const Batch gx = xsimd::max(xsimd::max(Batch::load_aligned(&lo[0][c]) - q.qx, q.qx - Batch::load_aligned(&hi[0][c])), zero);
-      const Batch gy = xsimd::max(xsimd::max(Batch::load_aligned(&lo[1][c]) - q.qy, q.qy - Batch::load_aligned(&hi[1][c])), zero);
-      const Batch gz = xsimd::max(xsimd::max(Batch::load_aligned(&lo[2][c]) - q.qz, q.qz - Batch::load_aligned(&hi[2][c])), zero);
-      live |= lane_bits(gx * gx + gy * gy + gz * gz < q.rr) << c;
-    }
-    // Visit rows with a kept cell, in row order: bit 3r of `rows` stands for row r.
-    for (std::uint32_t rows = (live | live >> 1 | live >> 2) & 01111111111u; rows != 0; rows &= rows - 1) {
-      const auto first = unsigned(std::countr_zero(rows)), r = first / 3;
-      const std::uint32_t row_live = live >> first & 7u;
-      const std::uint32_t* o = &off[r * 4];
-      q.scan(o[std::countr_zero(row_live)], o[std::bit_width(row_live)], r == 4);
-    }
-    return q.count;
-  }
+struct Ctx {
+  const CellGrid* grid;
+  const float* p[3];
+  std::size_t n;
+  float r2;
+  std::int32_t reach;
+  std::uint32_t* counts;  // count of sorted particle i goes to counts[i]
 };
+
+inline bool finite3(const float* const p[3], std::size_t i) {
+  return std::isfinite(p[0][i]) && std::isfinite(p[1][i]) && std::isfinite(p[2][i]);
+}
+
+// Compacted candidates: x, y, z and sorted index j.
+struct CandOut {
+  float* x;
+  float* y;
+  float* z;
+  std::uint32_t* j;
+};
+
+// Appends the candidates of [b, e) whose squared gap to the box is < r2 to o (room for e - b + W
+// past cnt is there). kSafe: every load of W from b..e stays < n.
+template <bool kSafe>
+[[gnu::always_inline]] inline std::uint32_t compact_range(const float* const p[3], std::size_t n, const Batch lo[3],
+                            const Batch hi[3], const Batch& rr, std::uint32_t b, std::uint32_t e,
+                            const CandOut o, std::uint32_t cnt) {
+  // Local copies: the stores below could alias anything reached through a pointer.
+  const Batch zero(0.0f), r2 = rr, l[3] = {lo[0], lo[1], lo[2]}, h[3] = {hi[0], hi[1], hi[2]};
+  const float* const q[3] = {p[0], p[1], p[2]};
+  float* const ox = o.x;
+  float* const oy = o.y;
+  float* const oz = o.z;
+  std::uint32_t* const oj = o.j;
+#if SEICHE_NB_AVX2
+  __m256i kv = _mm256_set1_epi32(std::int32_t(b));
+#endif
+  for (std::uint32_t k = b; k < e; k += std::uint32_t(W)) {
+    Batch c[3];
+    if (kSafe) {
+      for (int a = 0; a < 3; ++a) c[a] = Batch::load_unaligned(q[a] + k);
+    } else {  // the last particles of the arrays: never read past n
+      alignas(64) float t[3][W];
+      for (int a = 0; a < 3; ++a)
+        for (std::size_t ln = 0; ln < W; ++ln) t[a][ln] = k + ln < n ? q[a][k + ln] : kInf;
+      for (int a = 0; a < 3; ++a) c[a] = Batch::load_aligned(t[a]);
+    }
+    Batch g[3];
+    for (int a = 0; a < 3; ++a) g[a] = xsimd::max(xsimd::max(l[a] - c[a], c[a] - h[a]), zero);
+    std::uint32_t bits = lane_bits(g[0] * g[0] + g[1] * g[1] + g[2] * g[2] < r2);
+    if (e - k < W) bits &= (1u << (e - k)) - 1;
+#if SEICHE_NB_AVX2
+    const __m256i lanes = pack_lanes(bits);
+    _mm256_storeu_ps(ox + cnt, _mm256_permutevar8x32_ps(c[0], lanes));
+    _mm256_storeu_ps(oy + cnt, _mm256_permutevar8x32_ps(c[1], lanes));
+    _mm256_storeu_ps(oz + cnt, _mm256_permutevar8x32_ps(c[2], lanes));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(oj + cnt), _mm256_add_epi32(lanes, kv));
+    kv = _mm256_add_epi32(kv, _mm256_set1_epi32(std::int32_t(W)));
+    cnt += std::uint32_t(std::popcount(bits));
+#else
+    alignas(64) float t[3][W];
+    for (int a = 0; a < 3; ++a) c[a].store_aligned(t[a]);
+    for (; bits != 0; bits &= bits - 1, ++cnt) {
+      const auto ln = unsigned(std::countr_zero(bits));
+      ox[cnt] = t[0][ln], oy[cnt] = t[1][ln], oz[cnt] = t[2][ln], oj[cnt] = k + ln;
+    }
+#endif
+  }
+  return cnt;
+}
+
+[[gnu::noinline]] std::uint32_t compact_tail(const float* const p[3], std::size_t n, const Batch lo[3],
+                                             const Batch hi[3], const Batch& rr, std::uint32_t b,
+                                             std::uint32_t e, const CandOut o, std::uint32_t cnt) {
+  return compact_range<false>(p, n, lo, hi, rr, b, e, o, cnt);
+}
+
+// compact_range over rows [rb[r], re[r]) for r < rows, in order (one call per group: the set-up
+// of the SIMD constants is paid once). Rows that end near n take the slow, bounded loads.
+[[gnu::noinline]] std::uint32_t compact_rows(const float* const p[3], std::size_t n, const Batch lo[3],
+                                             const Batch hi[3], const Batch& rr, const std::uint32_t* rb,
+                                             const std::uint32_t* re, int rows, const CandOut o,
+                                             std::uint32_t cnt) {
+  for (int r = 0; r < rows; ++r)
+    cnt = std::size_t(re[r]) + W - 1 <= n ? compact_range<true>(p, n, lo, hi, rr, rb[r], re[r], o, cnt)
+                                          : compact_tail(p, n, lo, hi, rr, rb[r], re[r], o, cnt);
+  return cnt;
+}
+
+// Compacted candidates, padded to a multiple of W.
+struct Cand {
+  const float *x, *y, *z;
+  const std::uint32_t* j;
+  std::uint32_t padded;
+};
+
+// The neighbors of finite particle i among the candidates, to out (room for padded + W).
+inline std::uint32_t query1(const Cand& c, const float* const p[3], std::uint32_t i, const Batch& rr,
+                            std::uint32_t* out) {
+  const Batch qx(p[0][i]), qy(p[1][i]), qz(p[2][i]), r2 = rr;
+  // Local copies: the stores to out could alias anything reached through a pointer.
+  const float* const cx = c.x;
+  const float* const cy = c.y;
+  const float* const cz = c.z;
+  const std::uint32_t* const cj = c.j;
+  const std::uint32_t padded = c.padded;
+  std::uint32_t count = 0;
+#if SEICHE_NB_AVX2
+  const __m256i self = _mm256_set1_epi32(std::int32_t(i));
+#endif
+  for (std::uint32_t k = 0; k < padded; k += std::uint32_t(W)) {
+    const Batch dx = qx - Batch::load_unaligned(cx + k);
+    const Batch dy = qy - Batch::load_unaligned(cy + k);
+    const Batch dz = qz - Batch::load_unaligned(cz + k);
+    std::uint32_t bits = lane_bits(dx * dx + dy * dy + dz * dz < r2);
+#if SEICHE_NB_AVX2
+    const __m256i j = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(cj + k));
+    bits &= ~std::uint32_t(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(j, self))));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + count),
+                        _mm256_permutevar8x32_epi32(j, pack_lanes(bits)));
+    count += std::uint32_t(std::popcount(bits));
+#else
+    for (; bits != 0; bits &= bits - 1) {
+      const std::uint32_t j = cj[k + unsigned(std::countr_zero(bits))];
+      if (j != i) out[count++] = j;
+    }
+#endif
+  }
+  return count;
+}
+
+// Lists of the sorted particles [g0, g1), all in cell c.
+void process_group(const Ctx& ctx, Block& blk, const std::int32_t c[3], std::uint32_t g0,
+                   std::uint32_t g1) {
+  const float* const* p = ctx.p;
+  // A box around the group's finite particles. The plain min/max pass ignores NaN (comparisons
+  // fail) and is exact when every coordinate is finite; an infinite one shows in the box, and
+  // then the box is redone over the finite particles only. (A box larger than needed is fine.)
+  float lo[3], hi[3];
+  for (int a = 0; a < 3; ++a) {
+    float l = kInf, h = -kInf;
+    for (std::uint32_t i = g0; i < g1; ++i) {
+      const float v = p[a][i];
+      l = v < l ? v : l;
+      h = v > h ? v : h;
+    }
+    lo[a] = l, hi[a] = h;
+  }
+  if (!(std::isfinite(lo[0]) && std::isfinite(lo[1]) && std::isfinite(lo[2]) && std::isfinite(hi[0]) &&
+        std::isfinite(hi[1]) && std::isfinite(hi[2]))) {
+    bool any = false;
+    for (int a = 0; a < 3; ++a) lo[a] = kInf, hi[a] = -kInf;
+    for (std::uint32_t i = g0; i < g1; ++i) {
+      if (!finite3(p, i)) continue;
+      any = true;
+      for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], p[a][i]), hi[a] = std::max(hi[a], p[a][i]);
+    }
+    if (!any) {
+      std::fill(ctx.counts + g0, ctx.counts + g1, 0u);
+      return;
+    }
+  }
+  const Batch blo[3] = {Batch(lo[0]), Batch(lo[1]), Batch(lo[2])};
+  const Batch bhi[3] = {Batch(hi[0]), Batch(hi[1]), Batch(hi[2])};
+  const Batch rr(ctx.r2);
+
+  // Rows: x range [x0, x1) of cells, rows (yy, zz) in [y0, y1] x [z0, z1].
+  const CellGrid& g = *ctx.grid;
+  const std::int32_t* d = g.spec().dims;
+  const std::int32_t R = ctx.reach;
+  const std::uint32_t x0 = std::uint32_t(std::clamp(c[0] - R, 0, d[0]));
+  const std::uint32_t x1 = std::uint32_t(std::clamp(c[0] + R + 1, 0, d[0]));
+  const std::int32_t y0 = std::max(c[1] - R, 0), y1 = std::min(c[1] + R, d[1] - 1);
+  const std::int32_t z0 = std::max(c[2] - R, 0), z1 = std::min(c[2] + R, d[2] - 1);
+  std::size_t total = 0;  // all row candidates: a bound on the compacted count
+  for (std::int32_t zz = z0; zz <= z1; ++zz)
+    for (std::int32_t yy = y0; yy <= y1; ++yy) {
+      const std::uint32_t row_key = g.cell_index(0, yy, zz);
+      total += g.cell_begin(row_key + x1) - g.cell_begin(row_key + x0);
+    }
+  const std::size_t room = total + 2 * W;
+  blk.cx.ensure(room, 0), blk.cy.ensure(room, 0), blk.cz.ensure(room, 0), blk.cj.ensure(room, 0);
+  const CandOut o{blk.cx.data(), blk.cy.data(), blk.cz.data(), blk.cj.data()};
+
+  // Compacted candidates, rows in increasing (zz, yy), so in increasing sorted index; the rows
+  // go to compact_rows 9 at a time (all of them when reach = 1).
+  std::uint32_t cnt = 0, rb[9], re[9];
+  int rows = 0;
+  for (std::int32_t zz = z0; zz <= z1; ++zz)
+    for (std::int32_t yy = y0; yy <= y1; ++yy) {
+      const std::uint32_t row_key = g.cell_index(0, yy, zz);
+      const std::uint32_t b = g.cell_begin(row_key + x0), e = g.cell_begin(row_key + x1);
+      if (b >= e) continue;
+      rb[rows] = b, re[rows] = e;
+      if (++rows == 9) cnt = compact_rows(p, ctx.n, blo, bhi, rr, rb, re, rows, o, cnt), rows = 0;
+    }
+  if (rows > 0) cnt = compact_rows(p, ctx.n, blo, bhi, rr, rb, re, rows, o, cnt);
+  // Pad to a multiple of W with candidates that fail every test.
+  const std::uint32_t padded = std::uint32_t((cnt + W - 1) / W * W);
+  const Batch inf(kInf);
+  inf.store_unaligned(o.x + cnt), inf.store_unaligned(o.y + cnt), inf.store_unaligned(o.z + cnt);
+  std::fill_n(o.j + cnt, W, 0u);
+
+  // Room for every list of the group (each at most padded - 1, plus W of junk past the last).
+  blk.lists.ensure(blk.used + std::size_t(g1 - g0) * padded + W, blk.used);
+  const Cand cand{o.x, o.y, o.z, o.j, padded};
+  for (std::uint32_t i = g0; i < g1; ++i) {
+    if (!finite3(p, i)) {
+      ctx.counts[i] = 0;
+      continue;
+    }
+    const std::uint32_t count = query1(cand, p, i, rr, blk.lists.data() + blk.used);
+    blk.used += count;
+    ctx.counts[i] = count;
+  }
+}
+
+// Lists of the sorted particles [b0, b1) into blk (from blk.used = 0).
+void process_block(const Ctx& ctx, Block& blk, std::uint32_t b0, std::uint32_t b1) {
+  blk.used = 0;
+  const CellGrid& g = *ctx.grid;
+  for (std::uint32_t i = b0; i < b1;) {
+    std::int32_t c[3];
+    g.cell_of(ctx.p[0][i], ctx.p[1][i], ctx.p[2][i], c);
+    const std::uint32_t cell = g.cell_index(c[0], c[1], c[2]);
+    const std::uint32_t cb = g.cell_begin(cell), ce = g.cell_end(cell);
+    // The group: the rest of i's cell within the block (i alone if the positions are not the
+    // ones the grid was built from, a broken precondition that must still not loop forever).
+    const std::uint32_t g1 = cb <= i && i < ce ? std::min(ce, b1) : i + 1;
+    process_group(ctx, blk, c, i, g1);
+    i = g1;
+  }
+}
+
+// dst[0, count) = src[0, count). `stream`: non-temporal stores, for lists far larger than the
+// caches: they skip reading the destination lines in first (half the memory traffic).
+void copy_list(const std::uint32_t* src, std::size_t count, std::uint32_t* dst, bool stream) {
+#if SEICHE_NB_AVX2
+  if (stream && count >= 64) {
+    const std::size_t head = ((32 - (reinterpret_cast<std::uintptr_t>(dst) & 31)) & 31) / sizeof(std::uint32_t);
+    std::copy_n(src, head, dst);
+    src += head, dst += head, count -= head;
+    std::size_t k = 0;
+    for (; k + 8 <= count; k += 8)
+      _mm256_stream_si256(reinterpret_cast<__m256i*>(dst + k),
+                          _mm256_loadu_si256(reinterpret_cast<const __m256i*>(src + k)));
+    std::copy_n(src + k, count - k, dst + k);
+    _mm_sfence();
+    return;
+  }
+#endif
+  (void)stream;
+  std::copy_n(src, count, dst);
+}
 
 // Lets `v` hold `needed` entries, growing to `estimate` at once (not doubling) to keep memory
 // close to the final size.
@@ -248,6 +394,14 @@ void make_room(std::vector<std::uint32_t>& v, std::size_t needed, std::size_t es
 }
 
 }  // namespace
+
+std::size_t neighbor_list_scratch_bytes() {
+  std::lock_guard lock(pool_mutex);
+  std::size_t total = 0;
+  for (const auto& s : pool)
+    for (const Block& b : s->blocks) total += b.bytes();
+  return total;
+}
 
 std::size_t NeighborList::bytes() const {
   return (offsets.capacity() + indices.capacity()) * sizeof(std::uint32_t);
@@ -258,65 +412,63 @@ void build_neighbor_list(const CellGrid& grid, const float* x, const float* y, c
   if (n != grid.order().size())
     throw std::invalid_argument("seiche::neighbor::build_neighbor_list: n differs from the grid's particle count");
   const std::size_t m = grid.num_in_grid();  // sorted [0, m) are in cells; the rest have no list
-  out.offsets.assign(n + 1, 0);
-  out.indices.clear();  // keeps its storage for reuse
-  if (!(radius > 0) || m == 0) return;
-  const float* const p[3] = {x, y, z};
-  const float r2 = radius * radius;
+  if (!(radius > 0) || m == 0) {
+    out.offsets.assign(n + 1, 0);
+    out.indices.clear();  // keeps its storage for reuse
+    return;
+  }
+  out.offsets.resize(n + 1);  // every entry is written below
+  out.offsets[0] = 0;
 
   // How many cells away a neighbor can be: 1 when radius <= cell_size, the usual case.
   const std::int32_t* d = grid.spec().dims;
   const double cells_away = std::ceil(double(radius) / double(grid.spec().cell_size));
   const auto reach = std::int32_t(std::clamp(std::isnan(cells_away) ? 1.0 : cells_away, 1.0,
                                              double(std::max({d[0], d[1], d[2]}))));
-  // Boxes cost 24 bytes a cell: only when cells are no more numerous than particles.
-  Boxes boxes;
-  const bool cull = reach == 1 && grid.spec().cell_count() <= n;
-  if (cull) compute_boxes(grid, p, boxes);
+  const Ctx ctx{&grid, {x, y, z}, n, radius * radius, reach, out.offsets.data() + 1};
 
-  struct Block {
-    Stencil stencil;
-    std::vector<std::uint32_t> lists;
-    std::size_t used = 0;
-  };
-  std::vector<Block> blocks(kWave / kGrain);
-  std::uint32_t* const counts = out.offsets.data() + 1;  // count of i at counts[i], summed below
-
-  for (std::size_t w0 = 0; w0 < m; w0 += kWave) {
-    const std::size_t w1 = std::min(m, w0 + kWave);
-    const std::size_t nblocks = (w1 - w0 + kGrain - 1) / kGrain;
-    tbb::parallel_for(std::size_t(0), nblocks, [&](std::size_t b) {
-      Block& blk = blocks[b];
-      Stencil& s = blk.stencil;
-      blk.used = 0;
-      for (std::size_t i = w0 + b * kGrain, e = std::min(w1, i + kGrain); i < e; ++i) {
-        if (i < s.begin || i >= s.end) {
-          std::int32_t c[3];
-          grid.cell_of(x[i], y[i], z[i], c);
-          const std::uint32_t cell = grid.cell_index(c[0], c[1], c[2]);
-          s.gather(grid, c, reach, cull ? &boxes : nullptr);
-          s.begin = grid.cell_begin(cell), s.end = grid.cell_end(cell);
+  // Block size: small inputs get small blocks so that every core has work (the result does not
+  // depend on it).
+  const std::size_t grain = std::clamp<std::size_t>((m + kWaveBlocks - 1) / kWaveBlocks, 128, 1024);
+  const std::size_t wave = kWaveBlocks * grain;
+  std::unique_ptr<Scratch> scratch = take_scratch();
+  Block* const blocks = scratch->blocks;
+  std::size_t total = 0;  // entries placed so far (out.indices[0, total) are final)
+  try {
+    for (std::size_t w0 = 0; w0 < m; w0 += wave) {
+      const std::size_t w1 = std::min(m, w0 + wave);
+      const std::size_t nblocks = (w1 - w0 + grain - 1) / grain;
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nblocks, 1), [&](const auto& r) {
+        for (std::size_t b = r.begin(); b < r.end(); ++b) {
+          const std::size_t b0 = w0 + b * grain;
+          process_block(ctx, blocks[b], std::uint32_t(b0), std::uint32_t(std::min(w1, b0 + grain)));
         }
-        if (blk.lists.size() < blk.used + s.candidates + W)
-          blk.lists.resize(2 * (blk.used + s.candidates + W));
-        const std::uint32_t c = s.query(p, n, std::uint32_t(i), r2, blk.lists.data() + blk.used);
-        blk.used += c;
-        counts[i] = c;
+      });
+      // Offsets of the wave, in order, then the blocks' lists copied into place.
+      std::uint64_t sum = total;
+      std::uint32_t* const off = out.offsets.data();
+      for (std::size_t i = w0; i < w1; ++i) off[i + 1] = std::uint32_t(sum += off[i + 1]);
+      if (sum > std::numeric_limits<std::uint32_t>::max())
+        throw std::length_error("seiche::neighbor::build_neighbor_list: more than 2^32-1 neighbor entries");
+      if (out.indices.size() < sum) {  // grows only: a steady-state call never zero-fills
+        make_room(out.indices, sum, std::size_t(double(sum) / double(w1) * double(m) * 1.0625));
+        out.indices.resize(sum);
       }
-    });
-    // Offsets of the wave, in order, then the blocks' lists copied into place.
-    std::uint64_t sum = out.offsets[w0];
-    for (std::size_t i = w0; i < w1; ++i) out.offsets[i + 1] = std::uint32_t(sum += counts[i]);
-    if (sum > std::numeric_limits<std::uint32_t>::max())
-      throw std::length_error("seiche::neighbor::build_neighbor_list: more than 2^32-1 neighbor entries");
-    make_room(out.indices, sum, std::size_t(double(sum) / double(w1) * double(m) * 1.0625));
-    out.indices.resize(sum);
-    tbb::parallel_for(std::size_t(0), nblocks, [&](std::size_t b) {
-      std::copy_n(blocks[b].lists.data(), blocks[b].used,
-                  out.indices.data() + out.offsets[w0 + b * kGrain]);
-    });
+      // Lists of more than ~16 MB do not stay in the caches anyway: stream them out.
+      const bool stream = double(sum) / double(w1) * double(m) * sizeof(std::uint32_t) > 16e6;
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nblocks, 1), [&](const auto& r) {
+        for (std::size_t b = r.begin(); b < r.end(); ++b)
+          copy_list(blocks[b].lists.data(), blocks[b].used, out.indices.data() + off[w0 + b * grain], stream);
+      });
+      total = sum;
+    }
+  } catch (...) {
+    give_back(std::move(scratch));
+    throw;
   }
-  std::fill(out.offsets.begin() + std::ptrdiff_t(m) + 1, out.offsets.end(), out.offsets[m]);
+  give_back(std::move(scratch));
+  out.indices.resize(total);
+  std::fill(out.offsets.begin() + std::ptrdiff_t(m) + 1, out.offsets.end(), std::uint32_t(total));
   if (out.indices.capacity() - out.indices.size() > out.indices.size() / 8) out.indices.shrink_to_fit();
 }
 

@@ -28,4 +28,9 @@ struct NeighborList {
 void build_neighbor_list(const CellGrid& grid, const float* x, const float* y, const float* z,
                          std::size_t n, float radius, NeighborList& out);
 
+/// Bytes of scratch that build_neighbor_list keeps between calls so that a steady-state call
+/// allocates nothing: per concurrent call, 32 work blocks' staging lists (at most ~1024
+/// particles' lists each) and candidate buffers. Not included in NeighborList::bytes().
+std::size_t neighbor_list_scratch_bytes();
+
 }  // namespace seiche::neighbor
