@@ -122,31 +122,33 @@ inline WallSum<float> domain_walls(const PbfParams& prm, const Float4& p) {
 
 }  // namespace
 
-double lattice_kernel_sum(float spacing, float h) {
-  const SphKernel k(h);
+namespace {
+// Calls f(r^2) for every point of an ideal lattice of the given spacing within the kernel's
+// reach of the origin (the origin included).
+template <class F>
+void for_each_lattice_point(float spacing, float h, F&& f) {
   const int reach = int(std::ceil(h / spacing));
-  double sum = 0.0;
   for (int a = -reach; a <= reach; ++a)
     for (int b = -reach; b <= reach; ++b)
-      for (int c = -reach; c <= reach; ++c) {
-        const double r2 = double(spacing) * spacing * (a * a + b * b + c * c);
-        sum += k.poly6(float(r2));
-      }
+      for (int c = -reach; c <= reach; ++c) f(double(spacing) * spacing * (a * a + b * b + c * c));
+}
+}  // namespace
+
+double lattice_kernel_sum(float spacing, float h) {
+  const SphKernel k(h);
+  double sum = 0.0;
+  for_each_lattice_point(spacing, h, [&](double r2) { sum += k.poly6(float(r2)); });
   return sum;
 }
 
 double lattice_lambda_denominator(float spacing, float h) {
   const SphKernel k(h);
   const double volume = 1.0 / lattice_kernel_sum(spacing, h);
-  const int reach = int(std::ceil(h / spacing));
   double sum = 0.0;  // sum_j |V grad W_ij|^2; the self term |V sum_j grad W_ij|^2 is 0 by symmetry
-  for (int a = -reach; a <= reach; ++a)
-    for (int b = -reach; b <= reach; ++b)
-      for (int c = -reach; c <= reach; ++c) {
-        const double r2 = double(spacing) * spacing * (a * a + b * b + c * c);
-        const double g = k.spiky_grad_over_r(float(r2)) * std::sqrt(r2);
-        sum += volume * volume * g * g;
-      }
+  for_each_lattice_point(spacing, h, [&](double r2) {
+    const double g = k.spiky_grad_over_r(float(r2)) * std::sqrt(r2);
+    sum += volume * volume * g * g;
+  });
   return sum;
 }
 
