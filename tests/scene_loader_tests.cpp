@@ -290,7 +290,7 @@ TEST(SceneLoader, IntegersMayBeWrittenAsIntegralNumbers) {
 TEST(SceneLoader, BoundaryValuesAreAccepted) {
   const SceneDef s = load(R"({
     "solver": {"substeps": 10000, "iterations": 1, "relaxation": 0, "tensile_k": 0, "tensile_n": 1},
-    "fluids": [{"box": {"min": [0, 0, 0], "max": [0.02, 0.02, 0.02]}, "kernel_radius": 1,
+    "fluids": [{"box": {"min": [0, 0, 0], "max": [0.02, 0.02, 0.02]}, "kernel_radius": 1.5,
                 "viscosity": 1, "vorticity": 0}],
     "particles": [{"x": [1, 1, 1]}, {"x": [0, 0, 0]}],
     "output": {"frames": 1}})");
@@ -411,7 +411,14 @@ const BadCase kBadCases[] = {
     {"SpacingZero", R"({"fluids": [{)" FLUID_BOX R"(, "spacing": 0}]})", "fluids[0].spacing", "must be > 0, got 0"},
     {"SpacingNegative", R"({"fluids": [{)" FLUID_BOX R"(, "spacing": -0.1}]})", "fluids[0].spacing", "must be > 0"},
     {"KernelRadiusBelowOne", R"({"fluids": [{)" FLUID_BOX R"(, "kernel_radius": 0.5}]})", "fluids[0].kernel_radius",
-     "must be >= 1"},
+     "must be in [1.5, 4]"},
+    {"KernelRadiusOne", R"({"fluids": [{)" FLUID_BOX R"(, "kernel_radius": 1}]})", "fluids[0].kernel_radius",
+     "must be in [1.5, 4]"},
+    {"KernelRadiusHuge", R"({"fluids": [{)" FLUID_BOX R"(, "kernel_radius": 5}]})", "fluids[0].kernel_radius",
+     "must be in [1.5, 4]"},
+    {"SubstepUnderflows", R"({"solver": {"frame_dt": 1e-30}})", "solver.frame_dt", "gives substeps of"},
+    {"SubnormalMass", R"({"particles": [{"x": [0,0,0], "mass": 1e-40}]})", "particles[0].mass",
+     "must be 0 (pinned) or at least"},
     {"RestDensityZero", R"({"fluids": [{)" FLUID_BOX R"(, "rest_density": 0}]})", "fluids[0].rest_density",
      "must be > 0"},
     {"ViscosityAboveOne", R"({"fluids": [{)" FLUID_BOX R"(, "viscosity": 1.5}]})", "fluids[0].viscosity",

@@ -1,6 +1,7 @@
 #include "fluid_solver.hpp"
 
 #include <algorithm>
+#include <stdexcept>
 
 #include <tbb/parallel_for.h>
 
@@ -20,6 +21,8 @@ FluidSolver::FluidSolver(const FluidDef& material, const SolverDef& solver,
   // The mass that makes the initial lattice exactly rest density (about rest_density s^3).
   params_.mass = float(material.rest_density / kernels::lattice_kernel_sum(s, params_.h));
   const double full_denominator = kernels::lattice_lambda_denominator(s, params_.h);
+  if (!(full_denominator > 0.0))  // the loader keeps kernel_radius >= 1.5, where it is > 0
+    throw std::invalid_argument("fluid: kernel_radius gives the density constraint no gradient");
   params_.epsilon = float(solver.relaxation * full_denominator);
   params_.lambda_scale = float(1.0 / full_denominator);
   params_.tensile_k = solver.tensile_k;

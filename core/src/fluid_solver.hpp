@@ -29,7 +29,8 @@ class FluidSolver {
   void solve_density();
   void apply_vorticity_confinement(float dt);
   void apply_viscosity();
-  /// Density error on the current positions x (end of a frame).
+  /// Density error on the current positions x (end of a frame; the neighbor lists must have
+  /// been built on them).
   FluidError measure();
 
  private:

@@ -38,10 +38,11 @@ void write_file_atomically(const std::filesystem::path& path, std::string_view b
     }
     done += std::size_t(n);
   }
-  if (::fsync(fd) != 0 || ::close(fd) != 0) {
-    const int err = errno;
+  const int sync_error = ::fsync(fd) != 0 ? errno : 0;
+  const int close_error = ::close(fd) != 0 ? errno : 0;
+  if (sync_error != 0 || close_error != 0) {
     ::unlink(tmp.c_str());
-    fail(path, "cannot flush to disk", err);
+    fail(path, "cannot flush to disk", sync_error != 0 ? sync_error : close_error);
   }
   if (std::rename(tmp.c_str(), path.c_str()) != 0) {
     const int err = errno;

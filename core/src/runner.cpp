@@ -90,11 +90,11 @@ RunResult run_scene(const SceneDef& scene, const RunOptions& options) {
                               std::size_t(result.threads));
   const int frames = options.frames > 0 ? options.frames : scene.output.frames;
 
+  Simulation sim(scene);  // before any folder is made: a scene that cannot be built writes nothing
   if (!options.out_dir.empty()) prepare_output_directory(options.out_dir);
   if (!options.report.empty() && options.report.has_parent_path())
     prepare_output_directory(options.report.parent_path());
 
-  Simulation sim(scene);
   result.particles = sim.particles().size();
   const std::vector<std::string> pipeline = sim.pipeline();
   RunReport report(scene, result.particles, frames, result.threads, pipeline);

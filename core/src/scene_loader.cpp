@@ -37,6 +37,12 @@ using detail::member_path;
 
 constexpr double kMaxStepsPerFrame = 10000;      // substeps and iterations: more is a typo
 constexpr double kMaxParticlesPerFluid = 50e6;   // a larger block is a typo in spacing or box
+constexpr double kMaxParticles = 50e6;           // all blocks together (32-bit neighbor offsets)
+// At 1 spacing the lattice neighbors sit exactly at r = h and the constraint has no gradient;
+// past 4 a particle has some 270 neighbors, far past any useful accuracy.
+constexpr double kMinKernelRadius = 1.5, kMaxKernelRadius = 4.0;
+constexpr double kMinSubstep = 1e-6;             // s: below this, float time steps underflow
+constexpr double kMinMass = 1e-12;               // kg: 1 / mass must be a finite float
 constexpr double kLatticeTolerance = 1e-4;       // of a spacing, absorbs rounding of box edges
 const std::string kCommandLine = "(command line)";
 
@@ -244,6 +250,9 @@ SolverDef read_solver(JsonReader r) {
   r.read("tensile_n", s.tensile_n, Range::closed(1, 8));
   r.read("tensile_dq", s.tensile_dq, Range::open(0, 1));
   r.finish();
+  if (s.frame_dt / s.substeps < kMinSubstep)
+    r.fail_at("frame_dt", fmt::format("gives substeps of {} s (frame_dt / substeps); the smallest is {} s",
+                                      s.frame_dt / s.substeps, kMinSubstep));
   return s;
 }
 
@@ -283,7 +292,7 @@ BoxDef read_box(JsonReader r) {
 FluidDef read_fluid(JsonReader r) {
   FluidDef f;
   r.read("spacing", f.spacing, Range::above(0));
-  r.read("kernel_radius", f.kernel_radius, Range::at_least(1));
+  r.read("kernel_radius", f.kernel_radius, Range::closed(kMinKernelRadius, kMaxKernelRadius));
   r.read("rest_density", f.rest_density, Range::above(0));
   r.read("viscosity", f.viscosity, Range::closed(0, 1));
   r.read("vorticity", f.vorticity, Range::at_least(0));
@@ -297,6 +306,8 @@ ParticleDef read_particle(JsonReader r) {
   ParticleDef p;
   r.read("v", p.v);
   r.read("mass", p.mass, Range::at_least(0));
+  if (p.mass != 0.0f && p.mass < kMinMass)
+    r.fail_at("mass", fmt::format("must be 0 (pinned) or at least {} kg, got {}", kMinMass, p.mass));
   r.require("x");
   r.read("x", p.x);
   r.finish();
@@ -358,6 +369,7 @@ bool inside(const Vec3& p, const DomainDef& d) {
 }
 
 void check_fluids(const SceneDef& scene, const std::string& file) {
+  double total = 0;
   const std::string domain = fmt::format("{}..{}", format_vec(scene.domain.min), format_vec(scene.domain.max));
   for (std::size_t k = 0; k < scene.fluids.size(); ++k) {
     const FluidDef& f = scene.fluids[k];
@@ -377,6 +389,10 @@ void check_fluids(const SceneDef& scene, const std::string& file) {
     if (count > kMaxParticlesPerFluid)
       fail(file, box_path, fmt::format("would hold {:.0f} particles at spacing {} m; the limit is {:.0f} per block",
                                        count, f.spacing, kMaxParticlesPerFluid));
+    total += count;
+    if (total > kMaxParticles)
+      fail(file, box_path, fmt::format("brings the fluid to {:.0f} particles; the limit is {:.0f} in all", total,
+                                       kMaxParticles));
     if (!inside(f.box.min, scene.domain) || !inside(f.box.max, scene.domain))
       fail(file, box_path, fmt::format("{}..{} reaches outside the domain {}", format_vec(f.box.min),
                                        format_vec(f.box.max), domain));

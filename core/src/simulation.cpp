@@ -254,7 +254,13 @@ FrameMetrics Simulation::measure() {
   m.kinetic_energy = h.kinetic;
   m.max_speed = std::sqrt(h.max_speed2);
   m.non_finite = h.non_finite;
-  if (fluid_) m.fluid = fluid_->measure();
+  if (fluid_) {
+    // The lists of the last substep were built on its predicted positions; particles have moved
+    // since, and a stale list could only miss pairs (under-report). After the update p = x, so
+    // a fresh neighbor stage sees the final positions.
+    find_neighbors();
+    m.fluid = fluid_->measure();
+  }
   if (distance_) m.distance = distance_->measure(view());
   return m;
 }

@@ -224,7 +224,7 @@ void apply_correction(const Float4* pos_lambda, NeighborSpan nbr, std::size_t n,
         accumulate(sz, f, q.dz);
       });
       sx *= Floats(grad_scale), sy *= Floats(grad_scale), sz *= Floats(grad_scale);
-      if (prm.walls) {  // 2 lambda_i f'(d) n: the wall pushes back with the particle's pressure
+      if (prm.walls) {  // lambda_i f'(d) n: the wall's part of the particle's own constraint
         const WallSum<Floats> wall = domain_walls(prm, pi);
         const Floats push = pi.w;
         sx += push * wall.gx, sy += push * wall.gy, sz += push * wall.gz;

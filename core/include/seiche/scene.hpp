@@ -22,8 +22,9 @@ struct SolverDef {
   /// a full rest neighborhood (dimensionless, >= 0): larger is softer and more stable; below
   /// about 0.3, one iteration per substep can overshoot and gain energy.
   float relaxation = 0.3f;
-  /// Artificial pressure s_corr = -k (W(r) / W(dq h))^n against tensile instability (PBF eq. 13).
-  float tensile_k = 0.1f;   ///< k (dimensionless, >= 0; 0 turns it off)
+  /// Artificial pressure s_corr = -k (W(r) / W(dq h))^n / D0 against tensile instability (PBF
+  /// eq. 13; D0 as for relaxation).
+  float tensile_k = 0.1f;   ///< k, in units of D0 as for relaxation (>= 0; 0 turns it off)
   int tensile_n = 4;        ///< n, an integer in 1..8
   float tensile_dq = 0.2f;  ///< dq as a fraction of the kernel radius, in (0, 1)
 };
@@ -47,8 +48,10 @@ struct FluidDef {
   /// Required. Lattice sites at (i + 0.5) * spacing from box.min, floor(extent / spacing + 1e-4)
   /// of them per axis.
   BoxDef box;
-  float spacing = 0.02f;          ///< m, particle spacing (> 0); particle mass = rest_density * spacing^3
-  float kernel_radius = 2.0f;     ///< SPH smoothing radius h in units of spacing (>= 1)
+  /// m, particle spacing (> 0). Particle mass: rest_density / (sum of W over the lattice), the
+  /// mass that makes the initial lattice exactly rest density (about rest_density spacing^3).
+  float spacing = 0.02f;
+  float kernel_radius = 2.0f;     ///< SPH smoothing radius h in units of spacing (1.5..4)
   float rest_density = 1000.0f;   ///< kg/m^3 (> 0)
   float viscosity = 0.01f;        ///< XSPH viscosity coefficient c, dimensionless in [0, 1]; 0 = off
   float vorticity = 0.0f;         ///< vorticity confinement strength epsilon (m/s, >= 0); 0 = off
@@ -59,7 +62,7 @@ struct FluidDef {
 struct ParticleDef {
   Vec3 x{0.0f, 0.0f, 0.0f};  ///< m, required, inside the domain
   Vec3 v{0.0f, 0.0f, 0.0f};  ///< m/s
-  float mass = 1.0f;         ///< kg (>= 0); 0 pins the particle
+  float mass = 1.0f;         ///< kg: 0 pins the particle, else >= 1e-12
 };
 
 /// One entry of "distance_constraints": |x_i - x_j| = rest_length, XPBD with compliance.
