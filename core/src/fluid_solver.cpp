@@ -6,6 +6,7 @@
 #include <tbb/parallel_for.h>
 
 #include "blocked_reduce.hpp"
+#include "seiche/kernels/pbf_walls.hpp"
 #include "seiche/kernels/vorticity_confinement.hpp"
 #include "seiche/kernels/xsph_viscosity.hpp"
 
@@ -29,6 +30,8 @@ FluidSolver::FluidSolver(const FluidDef& material, const SolverDef& solver,
   params_.tensile_n = solver.tensile_n;
   params_.tensile_dq = solver.tensile_dq;
   params_.walls = true;
+  params_.wall_scale = float(kernels::lattice_wall_share(s, params_.h) /
+                             kernels::wall_density_fraction(0.5f * s, params_.h));
   for (int a = 0; a < 3; ++a) params_.wall_min[a] = domain.min[a], params_.wall_max[a] = domain.max[a];
   particle_radius_ = 0.5f * s;
   viscosity_ = material.viscosity;

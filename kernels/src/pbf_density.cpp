@@ -90,7 +90,10 @@ SEICHE_INLINE inline PairGeometry<Floats> pair_geometry(const PairConstants& c, 
 }
 
 // The domain walls' share of a particle's density and its gradient (pbf_walls.hpp), for floats
-// and for batches: fraction sums f over the six walls, g = sum of f'(d) n.
+// and for batches. Per axis a, f_a = scale (f(d_lo) + f(d_hi)); the walls of different axes
+// overlap in edges and corners, so they combine as if the kernel were separable:
+//   F = 1 - prod_a (1 - f_a),   dF/dp_a = f_a' prod_{b != a} (1 - f_b)
+// (a plain sum would count the edges and corner twice: about +10 % density at a box corner).
 template <class T>
 struct WallSum {
   T fraction, gx, gy, gz;
@@ -98,16 +101,16 @@ struct WallSum {
 template <class T, class Max, class Min>
 SEICHE_INLINE inline WallSum<T> domain_walls(const PbfParams& prm, const T& x, const T& y,
                                              const T& z, Max max_fn, Min min_fn) {
-  WallSum<T> sum{T(0.0f), T(0.0f), T(0.0f), T(0.0f)};
   const T* p[3] = {&x, &y, &z};
-  T* g[3] = {&sum.gx, &sum.gy, &sum.gz};
+  T f[3], g[3];
   for (int a = 0; a < 3; ++a) {
     const auto lo = wall_term<T>(*p[a] - T(prm.wall_min[a]), prm.h, max_fn, min_fn);  // n = +e_a
     const auto hi = wall_term<T>(T(prm.wall_max[a]) - *p[a], prm.h, max_fn, min_fn);  // n = -e_a
-    sum.fraction += lo.fraction + hi.fraction;
-    *g[a] += lo.slope - hi.slope;
+    f[a] = T(prm.wall_scale) * (lo.fraction + hi.fraction);
+    g[a] = T(prm.wall_scale) * (lo.slope - hi.slope);
   }
-  return sum;
+  const T in0 = T(1.0f) - f[0], in1 = T(1.0f) - f[1], in2 = T(1.0f) - f[2];
+  return {T(1.0f) - in0 * in1 * in2, g[0] * in1 * in2, g[1] * in0 * in2, g[2] * in0 * in1};
 }
 inline WallSum<Floats> domain_walls(const PbfParams& prm, const Gathered4& p) {
   return domain_walls<Floats>(
@@ -139,6 +142,19 @@ double lattice_kernel_sum(float spacing, float h) {
   double sum = 0.0;
   for_each_lattice_point(spacing, h, [&](double r2) { sum += k.poly6(float(r2)); });
   return sum;
+}
+
+double lattice_wall_share(float spacing, float h) {
+  // The lattice points behind a wall for a particle half a spacing in front of it: those whose
+  // height (c + 1/2) spacing is below 0, i.e. c <= -1.
+  const SphKernel k(h);
+  const int reach = int(std::ceil(h / spacing));
+  double behind = 0.0;
+  for (int a = -reach; a <= reach; ++a)
+    for (int b = -reach; b <= reach; ++b)
+      for (int c = -reach; c <= -1; ++c)
+        behind += k.poly6(float(double(spacing) * spacing * (a * a + b * b + c * c)));
+  return behind / lattice_kernel_sum(spacing, h);
 }
 
 double lattice_lambda_denominator(float spacing, float h) {

@@ -42,6 +42,9 @@ struct PbfParams {
   bool walls = false;
   float wall_min[3] = {0, 0, 0};
   float wall_max[3] = {0, 0, 0};
+  /// Scales the continuous wall share so that a rest lattice half a spacing from a wall is at
+  /// rest density: lattice_wall_share / wall_density_fraction(spacing / 2, h).
+  float wall_scale = 1.0f;
   float tensile_dq = 0.2f;   ///< fraction of h
 };
 
@@ -51,6 +54,9 @@ double lattice_kernel_sum(float spacing, float h);
 /// The lambda denominator sum_k |grad C|^2 of a particle inside that lattice (with V = m/rho0):
 /// the scale against which the relaxation epsilon is given.
 double lattice_lambda_denominator(float spacing, float h);
+/// The share of that lattice sum lying behind a wall for a particle half a spacing in front of
+/// it: what the wall must lend for the lattice at the wall to read rest density.
+double lattice_wall_share(float spacing, float h);
 
 /// Pass 1 over particles [0, n): density[i], lambda[i].
 void pbf_density_lambda(const Float4* pos, NeighborSpan nbr, std::size_t n, const PbfParams& prm,
