@@ -19,8 +19,9 @@ struct SolverDef {
   int iterations = 2;            ///< constraint iterations per substep (1..10000)
   Vec3 gravity{0.0f, -9.81f, 0.0f};  ///< m/s^2
   /// PBF constraint-force mixing epsilon, relative to the lambda denominator of a particle with
-  /// a full rest neighborhood (dimensionless, >= 0): larger is softer and more stable; below
-  /// about 0.3, one iteration per substep can overshoot and gain energy.
+  /// a full rest neighborhood (dimensionless, >= 0): larger is softer and more stable. Below
+  /// about 0.3 a single iteration per substep overshoots (Jacobi) and gains energy; tall fluid
+  /// columns need 2 iterations even at 0.3.
   float relaxation = 0.3f;
   /// Artificial pressure s_corr = -k (W(r) / W(dq h))^n / D0 against tensile instability (PBF
   /// eq. 13; D0 as for relaxation).
