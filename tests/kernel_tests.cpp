@@ -281,6 +281,42 @@ TEST(Pbf, WallsMakeParticlesAtAWallReadRestDensity) {
   EXPECT_LT(errors.back(), 0.5f * errors.front());
 }
 
+// Runs both PBF passes vectorized and as the scalar reference on the same input (corrections
+// added to positions that start at `start`), expects them to agree to 1e-4 of the largest value
+// and everything to stay finite; returns the vectorized lambdas and corrected x, y, z.
+struct PbfPassResult {
+  std::vector<float> lambda, px, py, pz;
+};
+PbfPassResult expect_passes_match_reference(std::vector<Float4>& pos, const PbfParams& prm,
+                                            const BruteNeighbors& nb, float start) {
+  const std::size_t n = pos.size();
+  std::vector<float> rho(n), lambda(n), rho_ref(n), lambda_ref(n);
+  pbf_density_lambda(pos.data(), nb.span(), n, prm, rho.data(), lambda.data());
+  pbf_density_lambda_reference(pos.data(), nb.span(), n, prm, rho_ref.data(), lambda_ref.data());
+  double max_lambda = 0.0;
+  for (std::size_t i = 0; i < n; ++i) max_lambda = std::max(max_lambda, double(std::abs(lambda_ref[i])));
+  EXPECT_GT(max_lambda, 0.0);
+  for (std::size_t i = 0; i < n; ++i) {
+    EXPECT_NEAR(rho[i], rho_ref[i], 1e-4f * rho_ref[i]) << i;
+    EXPECT_NEAR(lambda[i], lambda_ref[i], 1e-4 * max_lambda) << i;
+    pos[i].w = lambda_ref[i];
+  }
+  std::vector<float> px(n, start), py(n, start), pz(n, start), rx(n, start), ry(n, start), rz(n, start);
+  pbf_apply_correction(pos.data(), nb.span(), n, prm, px.data(), py.data(), pz.data());
+  pbf_apply_correction_reference(pos.data(), nb.span(), n, prm, rx.data(), ry.data(), rz.data());
+  double max_dp = 0.0;
+  for (std::size_t i = 0; i < n; ++i)
+    max_dp = std::max({max_dp, double(std::abs(rx[i] - start)), double(std::abs(ry[i] - start))});
+  EXPECT_GT(max_dp, 0.0);
+  for (std::size_t i = 0; i < n; ++i) {
+    EXPECT_NEAR(px[i], rx[i], 1e-4 * max_dp) << i;
+    EXPECT_NEAR(py[i], ry[i], 1e-4 * max_dp) << i;
+    EXPECT_NEAR(pz[i], rz[i], 1e-4 * max_dp) << i;
+    EXPECT_TRUE(std::isfinite(px[i]) && std::isfinite(py[i]) && std::isfinite(pz[i])) << i;
+  }
+  return {lambda, px, py, pz};
+}
+
 TEST(Pbf, VectorizedPassesMatchScalarReference) {
   const float s = 0.1f;
   std::vector<Float4> pos = lattice(9, 0.85f * s, 0.2f * s, 3);  // compressed and jittered
@@ -292,30 +328,7 @@ TEST(Pbf, VectorizedPassesMatchScalarReference) {
   prm.walls = true;
   for (int a = 0; a < 3; ++a) prm.wall_min[a] = 0.0f, prm.wall_max[a] = 10.0f;
   BruteNeighbors nb(pos, prm.h);
-  const std::size_t n = pos.size();
-  std::vector<float> rho(n), lambda(n), rho_ref(n), lambda_ref(n);
-  pbf_density_lambda(pos.data(), nb.span(), n, prm, rho.data(), lambda.data());
-  pbf_density_lambda_reference(pos.data(), nb.span(), n, prm, rho_ref.data(), lambda_ref.data());
-  double max_lambda = 0.0;
-  for (std::size_t i = 0; i < n; ++i) max_lambda = std::max(max_lambda, double(std::abs(lambda_ref[i])));
-  ASSERT_GT(max_lambda, 0.0);
-  for (std::size_t i = 0; i < n; ++i) {
-    EXPECT_NEAR(rho[i], rho_ref[i], 1e-4f * rho_ref[i]);
-    EXPECT_NEAR(lambda[i], lambda_ref[i], 1e-4 * max_lambda);
-    pos[i].w = lambda_ref[i];
-  }
-  std::vector<float> px(n, 0.0f), py(n, 0.0f), pz(n, 0.0f), rx(n, 0.0f), ry(n, 0.0f), rz(n, 0.0f);
-  pbf_apply_correction(pos.data(), nb.span(), n, prm, px.data(), py.data(), pz.data());
-  pbf_apply_correction_reference(pos.data(), nb.span(), n, prm, rx.data(), ry.data(), rz.data());
-  double max_dp = 0.0;
-  for (std::size_t i = 0; i < n; ++i) max_dp = std::max({max_dp, double(std::abs(rx[i])), double(std::abs(ry[i]))});
-  ASSERT_GT(max_dp, 0.0);
-  for (std::size_t i = 0; i < n; ++i) {
-    EXPECT_NEAR(px[i], rx[i], 1e-4 * max_dp);
-    EXPECT_NEAR(py[i], ry[i], 1e-4 * max_dp);
-    EXPECT_NEAR(pz[i], rz[i], 1e-4 * max_dp);
-    EXPECT_TRUE(std::isfinite(px[i]) && std::isfinite(py[i]) && std::isfinite(pz[i]));
-  }
+  expect_passes_match_reference(pos, prm, nb, 0.0f);
 }
 
 TEST(Pbf, RaggedAndEmptyNeighborListsMatchScalarReference) {
@@ -332,30 +345,11 @@ TEST(Pbf, RaggedAndEmptyNeighborListsMatchScalarReference) {
   BruteNeighbors nb(pos, prm.h);
   const std::size_t n = pos.size();
   ASSERT_NE(n % 8, 0u);
-  std::vector<float> rho(n), lambda(n), rho_ref(n), lambda_ref(n);
-  pbf_density_lambda(pos.data(), nb.span(), n, prm, rho.data(), lambda.data());
-  pbf_density_lambda_reference(pos.data(), nb.span(), n, prm, rho_ref.data(), lambda_ref.data());
-  double max_lambda = 0.0;
-  for (std::size_t i = 0; i < n; ++i) max_lambda = std::max(max_lambda, double(std::abs(lambda_ref[i])));
-  ASSERT_GT(max_lambda, 0.0);
-  for (std::size_t i = 0; i < n; ++i) {
-    EXPECT_NEAR(rho[i], rho_ref[i], 1e-4f * rho_ref[i]) << i;
-    EXPECT_NEAR(lambda[i], lambda_ref[i], 1e-4 * max_lambda) << i;
-    pos[i].w = lambda_ref[i];
+  const PbfPassResult r = expect_passes_match_reference(pos, prm, nb, 1.0f);
+  for (std::size_t i : {std::size_t(0), std::size_t(60), n - 1}) {
+    EXPECT_EQ(r.lambda[i], 0.0f);  // no neighbors: no constraint, no motion
+    EXPECT_EQ(r.px[i], 1.0f);
   }
-  for (std::size_t i : {std::size_t(0), std::size_t(60), n - 1}) EXPECT_EQ(lambda[i], 0.0f);
-  std::vector<float> px(n, 1.0f), py(n, 1.0f), pz(n, 1.0f), rx(n, 1.0f), ry(n, 1.0f), rz(n, 1.0f);
-  pbf_apply_correction(pos.data(), nb.span(), n, prm, px.data(), py.data(), pz.data());
-  pbf_apply_correction_reference(pos.data(), nb.span(), n, prm, rx.data(), ry.data(), rz.data());
-  double max_dp = 0.0;
-  for (std::size_t i = 0; i < n; ++i) max_dp = std::max({max_dp, double(std::abs(rx[i] - 1.0f)), double(std::abs(ry[i] - 1.0f))});
-  ASSERT_GT(max_dp, 0.0);
-  for (std::size_t i = 0; i < n; ++i) {
-    EXPECT_NEAR(px[i], rx[i], 1e-4 * max_dp) << i;
-    EXPECT_NEAR(py[i], ry[i], 1e-4 * max_dp) << i;
-    EXPECT_NEAR(pz[i], rz[i], 1e-4 * max_dp) << i;
-  }
-  for (std::size_t i : {std::size_t(0), std::size_t(60), n - 1}) EXPECT_EQ(px[i], 1.0f);
 }
 
 TEST(Pbf, JacobiIterationsReduceCompression) {
