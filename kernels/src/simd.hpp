@@ -28,13 +28,6 @@ using Floats = xsimd::batch<float>;
 using Mask = xsimd::batch_bool<float>;
 inline constexpr std::size_t kLanes = Floats::size;
 
-/// 0, 1, 2, ... as floats: compared against a remaining count it masks a tail.
-inline Floats lane_index() {
-  alignas(64) static constexpr float iota[16] = {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15};
-  static_assert(kLanes <= 16);
-  return Floats::load_aligned(iota);
-}
-
 /// The four components of kLanes Float4 records, transposed into four batches (lane l holds
 /// records[index(l)]). One 16-byte load per record and a register transpose: xsimd 8's gather
 /// is a scalar loop, and hardware gathers are slower than this on AVX2 anyway.
