@@ -8,6 +8,7 @@ packages=(
   libeigen3-dev libtbb-dev libxsimd-dev xtl-dev
   nlohmann-json3-dev libcli11-dev libfmt-dev
   libgtest-dev libbenchmark-dev
+  libopenvdb-dev libboost-iostreams-dev libblosc-dev
   python3 python3-matplotlib
 )
 

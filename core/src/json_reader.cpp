@@ -176,6 +176,50 @@ void JsonReader::read(std::string_view key, std::string& out) {
   out = v->get<std::string>();
 }
 
+void JsonReader::read(std::string_view key, bool& out) {
+  const Json* v = find(key);
+  if (!v) return;
+  if (!v->is_boolean()) fail_at(key, "expected true or false, got " + describe_value(*v));
+  out = v->get<bool>();
+}
+
+namespace {
+std::string quoted_list(const std::vector<std::string>& names) {
+  std::string s;
+  for (std::size_t i = 0; i < names.size(); ++i)
+    s += (i == 0 ? "\"" : i + 1 == names.size() ? " or \"" : ", \"") + names[i] + "\"";
+  return s;
+}
+}  // namespace
+
+void JsonReader::read_choice(std::string_view key, std::string& out, const std::vector<std::string>& allowed) {
+  std::string value = out;
+  read(key, value);
+  if (std::find(allowed.begin(), allowed.end(), value) == allowed.end())
+    fail_at(key, fmt::format("\"{}\" is not one of {}", value, quoted_list(allowed)));
+  out = value;
+}
+
+void JsonReader::read_string_set(std::string_view key, std::vector<std::string>& out,
+                                 const std::vector<std::string>& allowed) {
+  const Json* v = find(key);
+  if (!v) return;
+  const std::string path = path_of(key);
+  if (!v->is_array()) fail(*file_, path, "expected an array of strings, got " + describe_value(*v));
+  std::vector<std::string> result;
+  for (std::size_t i = 0; i < v->size(); ++i) {
+    const Json& e = (*v)[i];
+    if (!e.is_string()) fail(*file_, element_path(path, i), "expected a string, got " + describe_value(e));
+    const std::string name = e.get<std::string>();
+    if (std::find(allowed.begin(), allowed.end(), name) == allowed.end())
+      fail(*file_, element_path(path, i), fmt::format("\"{}\" is not one of {}", name, quoted_list(allowed)));
+    if (std::find(result.begin(), result.end(), name) != result.end())
+      fail(*file_, element_path(path, i), fmt::format("\"{}\" is listed twice", name));
+    result.push_back(name);
+  }
+  out = std::move(result);
+}
+
 void JsonReader::read(std::string_view key, Vec3& out) {
   const Json* v = find(key);
   if (!v) return;

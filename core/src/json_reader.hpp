@@ -74,7 +74,13 @@ class JsonReader {
   void read(std::string_view key, float& out, Range range = {});
   void read(std::string_view key, double& out, Range range = {});
   void read(std::string_view key, int& out, Range range = {});  ///< integral values only
+  void read(std::string_view key, bool& out);
   void read(std::string_view key, std::string& out);
+  /// A string that must be one of `allowed`.
+  void read_choice(std::string_view key, std::string& out, const std::vector<std::string>& allowed);
+  /// An array of distinct strings, each one of `allowed`; the result replaces `out`.
+  void read_string_set(std::string_view key, std::vector<std::string>& out,
+                       const std::vector<std::string>& allowed);
   void read(std::string_view key, Vec3& out);  ///< an array of exactly 3 finite floats
 
   /// A nested object that must be present (see require() on when to ask for it).

@@ -273,6 +273,20 @@ DomainDef read_domain(JsonReader r) {
 OutputDef read_output(JsonReader r) {
   OutputDef o;
   r.read("frames", o.frames, Range::at_least(1));
+  r.read("checkpoint_every", o.checkpoint_every, Range::at_least(1));
+  r.read("particles", o.particles);
+  std::vector<std::string> grids{"surface", "density"};
+  r.read_string_set("vdb", grids, {"surface", "density", "points", "v"});
+  auto listed = [&](const char* g) { return std::find(grids.begin(), grids.end(), g) != grids.end(); };
+  o.vdb_surface = listed("surface");
+  o.vdb_density = listed("density");
+  o.vdb_points = listed("points");
+  o.vdb_velocity = listed("v");
+  r.read("mesh", o.mesh);
+  r.read("voxel_size", o.voxel_size, Range::at_least(0));
+  r.read("anisotropic", o.anisotropic);
+  r.read("half_float", o.half_float);
+  r.read_choice("compression", o.compression, {"blosc", "zip", "none"});
   r.finish();
   return o;
 }

@@ -89,9 +89,25 @@ struct ColliderDef {
   float friction = 0.0f;          ///< Coulomb friction coefficient (>= 0)
 };
 
-/// "output": what a run writes by default (the command line overrides it).
+/// "output": what a run or a bake writes (the command line overrides frames).
 struct OutputDef {
-  int frames = 60;  ///< number of frames to simulate (>= 1)
+  int frames = 60;           ///< number of frames to simulate (>= 1)
+  int checkpoint_every = 10; ///< bake: frames between checkpoints of the simulation state (>= 1)
+  bool particles = true;     ///< bake: particles.%04d.ply per frame (`seiche run` always writes them)
+  /// bake: the grids of <name>.%04d.vdb, from "vdb": ["surface", "density", "points", "v"];
+  /// none = no .vdb files.
+  bool vdb_surface = true;   ///< "surface": narrow-band level set of the fluid
+  bool vdb_density = true;   ///< "density": fog volume from the level set
+  bool vdb_points = false;   ///< "points": VDB Points with attributes v and id
+  bool vdb_velocity = false; ///< "v": velocity grid for motion blur
+  bool mesh = false;         ///< bake: <name>.%04d.obj surface mesh per frame
+  float voxel_size = 0.0f;   ///< m; 0 = automatic (half the fluid spacing)
+  bool anisotropic = false;  ///< Yu & Turk 2013 anisotropic surface instead of spheres
+  bool half_float = false;   ///< store float grids as 16-bit halves
+  std::string compression = "blosc";  ///< "blosc", "zip" or "none"
+
+  bool any_vdb() const { return vdb_surface || vdb_density || vdb_points || vdb_velocity; }
+  bool needs_surface() const { return vdb_surface || vdb_density || mesh; }
 };
 
 struct SceneDef {

@@ -1,0 +1,1 @@
+// Placeholder: replaced by the Yu & Turk 2013 anisotropic surface.

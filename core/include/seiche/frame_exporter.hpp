@@ -1,0 +1,38 @@
+// An exporter writes the files of one finished frame (a .vdb surface, an .obj mesh, ...). The
+// bake owns the frame loop and calls every exporter the scene asks for; exporters that need
+// libraries the core must not link (OpenVDB) live in their own targets and implement this
+// interface.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "seiche/particle_store.hpp"
+#include "seiche/scene.hpp"
+
+namespace seiche {
+
+/// One finished frame, as an exporter sees it. The store is in cell order; store.id gives the
+/// creation order that every export must follow.
+struct FrameView {
+  const ParticleStore& particles;
+  const SceneDef& scene;
+  int frame = 0;      ///< 1-based frame number
+  double time = 0.0;  ///< simulated time at the end of the frame (s)
+};
+
+class FrameExporter {
+ public:
+  virtual ~FrameExporter() = default;
+  /// Short name for progress lines and errors ("vdb").
+  virtual std::string name() const = 0;
+  /// The files write_frame() writes for `frame`, relative to the output folder.
+  virtual std::vector<std::filesystem::path> files(int frame) const = 0;
+  /// Writes this frame's files into `dir`, each atomically (write_file_atomically). Returns the
+  /// bytes written. Throws IoError when a file cannot be written.
+  virtual std::uint64_t write_frame(const FrameView& frame, const std::filesystem::path& dir) = 0;
+};
+
+}  // namespace seiche
