@@ -1,12 +1,15 @@
 # Seiche: the two commands of the README's quick start, and a few for developers.
 #   make run    install what is missing, build Release, bake the default scene
+#   make render render one baked frame with Blender (needs Debian's blender package)
 #   make test   install what is missing, build, run every test through ctest
 BUILD_DIR ?= build/release
 JOBS ?= $(shell nproc)
 SEICHE := $(BUILD_DIR)/apps/seiche
 CMAKE_FLAGS ?=
 
-.PHONY: all deps configure build run test bench clean
+RENDER_FRAME ?= 40
+
+.PHONY: all deps configure build run test bench render clean
 
 all: build
 
@@ -20,8 +23,14 @@ build: configure
 	@cmake --build $(BUILD_DIR) -j $(JOBS)
 
 run: build
-	$(SEICHE) run --out out/dam_break --report out/dam_break/report.json
-	@echo "make run: particle frames and report.json are in out/dam_break/"
+	$(SEICHE) bake --out out/dam_break
+	@echo "make run: the baked frames (dam_break.%04d.vdb, particles.%04d.ply) and report.json are in out/dam_break/; docs/rendering.md says how to load them"
+
+render:
+	@command -v blender >/dev/null || { echo "make render: needs Blender (apt-get install blender)" >&2; exit 1; }
+	@test -f out/dam_break/dam_break.$(shell printf %04d $(RENDER_FRAME)).vdb || { echo "make render: run 'make run' first (no out/dam_break/dam_break.$(shell printf %04d $(RENDER_FRAME)).vdb)" >&2; exit 1; }
+	blender -b --factory-startup -P scripts/render_frame.py -- out/dam_break/dam_break.$(shell printf %04d $(RENDER_FRAME)).vdb out/dam_break/render.$(shell printf %04d $(RENDER_FRAME)).png --samples 64
+	@echo "make render: out/dam_break/render.$(shell printf %04d $(RENDER_FRAME)).png"
 
 test: build
 	ctest --test-dir $(BUILD_DIR) --output-on-failure -j $(JOBS)
@@ -29,6 +38,8 @@ test: build
 bench: build
 	$(BUILD_DIR)/benchmarks/bench_neighbor --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 	$(BUILD_DIR)/benchmarks/bench_pbf --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+	@if [ -x $(BUILD_DIR)/benchmarks/bench_export ]; then \
+	  $(BUILD_DIR)/benchmarks/bench_export --benchmark_repetitions=5 --benchmark_report_aggregates_only=true; fi
 
 clean:
 	rm -rf build out

@@ -1,14 +1,24 @@
 // The command line as a user meets it: exit codes, error messages that name the file and the
-// field, and no output written when the input is bad.
+// field, and no output written when the input is bad. `seiche bake`: interrupted (SIGINT) and
+// killed (SIGKILL) bakes resume to the same bytes as an uninterrupted one; failed writes exit 3.
 #include <gtest/gtest.h>
 
+#include <fcntl.h>
+#include <signal.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
+#include <thread>
+#include <vector>
 
 namespace fs = std::filesystem;
 
@@ -19,14 +29,23 @@ struct Result {
   std::string out, err;
 };
 
+// One folder per test process (ctest runs the tests of this binary as parallel processes),
+// removed when the process ends.
+struct WorkDir {
+  fs::path path = fs::temp_directory_path() / "seiche_app_tests" / std::to_string(::getpid());
+  WorkDir() {
+    fs::remove_all(path);
+    fs::create_directories(path);
+  }
+  ~WorkDir() {
+    std::error_code ec;
+    fs::remove_all(path, ec);
+  }
+};
+
 fs::path work_dir() {
-  static const fs::path d = [] {
-    fs::path p = fs::temp_directory_path() / "seiche_app_tests";
-    fs::remove_all(p);
-    fs::create_directories(p);
-    return p;
-  }();
-  return d;
+  static const WorkDir d;
+  return d.path;
 }
 
 std::string slurp(const fs::path& p) {
@@ -36,9 +55,10 @@ std::string slurp(const fs::path& p) {
   return s.str();
 }
 
-Result seiche(const std::string& args) {
+// Runs seiche with `args` (shell words), `env` ("NAME=VALUE ...") set for it.
+Result seiche(const std::string& args, const std::string& env = "") {
   const fs::path out = work_dir() / "stdout.txt", err = work_dir() / "stderr.txt";
-  const std::string cmd = std::string("'") + SEICHE_EXE + "' " + args + " >'" + out.string() +
+  const std::string cmd = env + (env.empty() ? "" : " ") + "'" + SEICHE_EXE + "' " + args + " >'" + out.string() +
                           "' 2>'" + err.string() + "' </dev/null";
   const int status = std::system(cmd.c_str());
   Result r;
@@ -146,4 +166,262 @@ TEST(Cli, DefaultSceneRunsWithoutAFile) {
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.out.find("dam_break"), std::string::npos);
   EXPECT_TRUE(fs::exists(out / "particles.0001.ply"));
+}
+
+// ---- seiche bake ------------------------------------------------------------------------------
+
+namespace {
+
+// About 2400 fluid particles and a chain on distance constraints: every pass runs, a frame takes
+// a few ms. Particles only (no .vdb), so the tests mean the same with and without OpenVDB.
+const char* kBakeScene = R"({ "name": "small",
+  "solver": { "substeps": 4, "iterations": 2 },
+  "domain": { "min": [0,0,0], "max": [1,1,0.5] },
+  "output": { "frames": 20, "checkpoint_every": 5, "vdb": [] },
+  "particles": [ { "x": [0.8,0.9,0.25], "mass": 0 }, { "x": [0.85,0.9,0.25] }, { "x": [0.9,0.9,0.25] } ],
+  "distance_constraints": [ { "i": 0, "j": 1 }, { "i": 1, "j": 2 } ],
+  "fluids": [ { "box": { "min": [0,0,0], "max": [0.36,0.6,0.3] }, "spacing": 0.03 } ] })";
+
+fs::path fresh_dir(const std::string& name) {
+  const fs::path d = work_dir() / name;
+  fs::remove_all(d);
+  return d;
+}
+
+std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
+
+// Every file of a bake folder but report.json (it holds timings): name -> bytes.
+std::map<std::string, std::string> bake_files(const fs::path& dir) {
+  std::map<std::string, std::string> files;
+  for (const auto& e : fs::directory_iterator(dir))
+    if (e.path().filename() != "report.json") files[e.path().filename().string()] = slurp(e.path());
+  return files;
+}
+
+void expect_same_files(const fs::path& expected, const fs::path& actual) {
+  const auto a = bake_files(expected), b = bake_files(actual);
+  for (const auto& [name, bytes] : a) {
+    ASSERT_TRUE(b.count(name)) << name << " missing from " << actual;
+    EXPECT_TRUE(b.at(name) == bytes) << name << " differs between " << expected << " and " << actual;
+  }
+  EXPECT_EQ(a.size(), b.size());
+}
+
+void expect_no_temporary_files(const fs::path& dir) {
+  for (const auto& e : fs::directory_iterator(dir))
+    EXPECT_NE(e.path().extension(), ".tmp") << "left a temporary file: " << e.path();
+}
+
+// The straight 20-frame bake the resume tests compare with (baked once).
+const fs::path& straight_bake() {
+  static const fs::path dir = [] {
+    const fs::path d = fresh_dir("bake_straight");
+    const Result r = seiche("bake " + q(write_scene("small.json", kBakeScene)) + " --out " + q(d));
+    EXPECT_EQ(r.code, 0) << r.err;
+    return d;
+  }();
+  return dir;
+}
+
+}  // namespace
+
+TEST(CliBake, WritesEveryFrameACheckpointAndASummary) {
+  const fs::path dir = straight_bake();
+  for (int f = 1; f <= 20; ++f) {
+    char name[32];
+    std::snprintf(name, sizeof name, "particles.%04d.ply", f);
+    EXPECT_TRUE(fs::exists(dir / name)) << name;
+  }
+  EXPECT_FALSE(fs::exists(dir / "particles.0021.ply"));
+  for (const char* f : {"checkpoint.bin", "bake.json", "report.json"}) EXPECT_TRUE(fs::exists(dir / f)) << f;
+  expect_no_temporary_files(dir);
+  // The summary names the files and how much was written; progress goes to stderr.
+  const fs::path again = fresh_dir("bake_summary");
+  const Result r = seiche("bake " + q(write_scene("small.json", kBakeScene)) + " --frames 2 --threads 1 --out " + q(again));
+  ASSERT_EQ(r.code, 0) << r.err;
+  for (const char* s : {"particles.0001.ply .. particles.0002.ply", "checkpoint.bin (frame 2)", "written:",
+                        "simulate", "export", "fluid density", "1 threads"})
+    EXPECT_NE(r.out.find(s), std::string::npos) << s << " missing from the summary:\n" << r.out;
+  for (const char* s : {"frame 2/2", "ms/frame", "ETA", "written"})
+    EXPECT_NE(r.err.find(s), std::string::npos) << s << " missing from the progress:\n" << r.err;
+}
+
+TEST(CliBake, SigintStopsWithACheckpointAndResumesToTheSameBytes) {
+  const fs::path dir = fresh_dir("bake_sigint");
+  const fs::path scene = write_scene("small.json", kBakeScene);
+  // SIGINT right after frame 7's files: between checkpoints (every 5).
+  const Result r = seiche("bake " + q(scene) + " --out " + q(dir), "SEICHE_TEST_INTERRUPT_AFTER_FRAME=7");
+  EXPECT_EQ(r.code, 130) << r.err;
+  EXPECT_NE(r.err.find("interrupted after frame 7 of 20; resume with: seiche bake --resume " + dir.string()),
+            std::string::npos)
+      << r.err;
+  EXPECT_TRUE(fs::exists(dir / "checkpoint.bin"));
+  EXPECT_TRUE(fs::exists(dir / "particles.0007.ply"));
+  EXPECT_FALSE(fs::exists(dir / "particles.0008.ply"));
+  expect_no_temporary_files(dir);
+
+  fs::remove(scene);  // a resume needs nothing but the folder
+  std::ofstream(dir / ".particles.0009.ply.tmp") << "torn";  // as a kill mid-write leaves
+  const Result resumed = seiche("bake --resume " + q(dir) + " --threads 1");
+  ASSERT_EQ(resumed.code, 0) << resumed.err;
+  expect_no_temporary_files(dir);
+  EXPECT_NE(resumed.err.find("resuming small from the checkpoint of frame 7"), std::string::npos) << resumed.err;
+  expect_same_files(straight_bake(), dir);
+
+  const Result done = seiche("bake --resume " + q(dir));
+  EXPECT_EQ(done.code, 0) << done.err;
+  EXPECT_NE(done.out.find("already complete"), std::string::npos) << done.out;
+}
+
+TEST(CliBake, KilledBakeResumesFromItsLastCheckpointToTheSameBytes) {
+  const fs::path dir = fresh_dir("bake_killed");
+  const fs::path scene = write_scene("small.json", kBakeScene);
+  const fs::path log = work_dir() / "killed.log";
+  // Slow each frame down (100 ms) so that the kill lands mid-bake, whatever the machine.
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    ::dup2(fd, 1);
+    ::dup2(fd, 2);
+    ::setenv("SEICHE_TEST_FRAME_DELAY_MS", "100", 1);
+    const std::string out = dir.string(), scene_file = scene.string();
+    ::execl(SEICHE_EXE, SEICHE_EXE, "bake", scene_file.c_str(), "--out", out.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  // Frame 11's file exists once the frame-10 checkpoint is complete (files, then checkpoint).
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (!fs::exists(dir / "particles.0011.ply") && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  ::kill(pid, SIGKILL);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  ASSERT_TRUE(fs::exists(dir / "particles.0011.ply")) << slurp(log);
+  const bool killed_mid_bake = WIFSIGNALED(status);
+  EXPECT_TRUE(killed_mid_bake) << "the bake ended before the kill: " << slurp(log);
+  if (killed_mid_bake) EXPECT_FALSE(fs::exists(dir / "particles.0020.ply"));
+
+  const Result resumed = seiche("bake --resume " + q(dir));
+  ASSERT_EQ(resumed.code, 0) << resumed.err;
+  if (killed_mid_bake)
+    EXPECT_NE(resumed.err.find("from the checkpoint of frame 10"), std::string::npos) << resumed.err;
+  expect_no_temporary_files(dir);  // the resume removes what the kill left
+  expect_same_files(straight_bake(), dir);
+}
+
+TEST(CliBake, FrameRangeWritesExactlyThoseFrames) {
+  const fs::path dir = fresh_dir("bake_range");
+  const Result r = seiche("bake " + q(write_scene("small.json", kBakeScene)) + " --frames 3-5 --out " + q(dir));
+  ASSERT_EQ(r.code, 0) << r.err;
+  std::vector<std::string> plys;
+  for (const auto& e : fs::directory_iterator(dir))
+    if (e.path().extension() == ".ply") plys.push_back(e.path().filename().string());
+  std::sort(plys.begin(), plys.end());
+  EXPECT_EQ(plys, (std::vector<std::string>{"particles.0003.ply", "particles.0004.ply", "particles.0005.ply"}));
+  // Simulated from the start: frame 4 is frame 4 of the full bake.
+  EXPECT_TRUE(slurp(dir / "particles.0004.ply") == slurp(straight_bake() / "particles.0004.ply"));
+}
+
+TEST(CliBake, BadFrameRangesAreBadInput) {
+  const fs::path scene = write_scene("small.json", kBakeScene);
+  for (const char* range : {"5-3", "0-4", "0", "-3", "3-", "x", "2-x", "1-2-3", "99999999999"}) {
+    const fs::path dir = fresh_dir("bake_badrange");
+    const Result r = seiche("bake " + q(scene) + " --frames '" + range + "' --out " + q(dir));
+    EXPECT_EQ(r.code, 2) << range << ": " << r.err;
+    EXPECT_NE(r.err.find("--frames"), std::string::npos) << range << ": " << r.err;
+    EXPECT_FALSE(fs::exists(dir)) << range << ": wrote output for a bad range";
+  }
+  // --resume takes everything from the folder.
+  EXPECT_EQ(seiche("bake --resume " + q(work_dir()) + " --frames 3").code, 2);
+}
+
+TEST(CliBake, UnwritableFolderIsExitCode3NamingTheFolder) {
+  const Result r = seiche("bake " + q(write_scene("small.json", kBakeScene)) + " --out /dev/null/seiche");
+  EXPECT_EQ(r.code, 3) << r.err;
+  EXPECT_NE(r.err.find("/dev/null/seiche"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("frame 1/"), std::string::npos) << "simulated before checking the folder: " << r.err;
+}
+
+TEST(CliBake, FailedFrameWriteIsExitCode3AndKeepsTheLastCompleteFrame) {
+  const fs::path dir = fresh_dir("bake_failed_write");
+  // A folder in the way of frame 8's file: its rename fails mid-bake, as on a full disk.
+  fs::create_directories(dir / "particles.0008.ply" / "x");
+  const Result r = seiche("bake " + q(write_scene("small.json", kBakeScene)) + " --out " + q(dir));
+  EXPECT_EQ(r.code, 3) << r.err;
+  EXPECT_NE(r.err.find((dir / "particles.0008.ply").string()), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("frames up to 7 are complete"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("checkpoint of frame 5 is kept"), std::string::npos) << r.err;
+  EXPECT_TRUE(fs::exists(dir / "particles.0007.ply"));
+  expect_no_temporary_files(dir);
+  fs::remove_all(dir / "particles.0008.ply");
+  const Result resumed = seiche("bake --resume " + q(dir));
+  ASSERT_EQ(resumed.code, 0) << resumed.err;
+  expect_same_files(straight_bake(), dir);
+}
+
+TEST(CliBake, ResumeOfAMissingFolderOrDamagedCheckpointIsBadInput) {
+  const fs::path missing = work_dir() / "no_such_bake";
+  const Result r = seiche("bake --resume " + q(missing));
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find(missing.string()), std::string::npos) << r.err;
+
+  const fs::path not_a_bake = fresh_dir("bake_not_a_bake");
+  fs::create_directories(not_a_bake);
+  const Result r2 = seiche("bake --resume " + q(not_a_bake));
+  EXPECT_EQ(r2.code, 2) << r2.err;
+  EXPECT_NE(r2.err.find((not_a_bake / "bake.json").string()), std::string::npos) << r2.err;
+
+  // A checkpoint cut short (as a crash of a non-atomic writer would leave it).
+  const fs::path dir = fresh_dir("bake_corrupt");
+  fs::copy(straight_bake(), dir);
+  const std::string cp = slurp(dir / "checkpoint.bin");
+  std::ofstream(dir / "checkpoint.bin", std::ios::binary | std::ios::trunc).write(cp.data(), std::streamsize(cp.size() / 2));
+  const Result r3 = seiche("bake --resume " + q(dir));
+  EXPECT_EQ(r3.code, 2) << r3.err;
+  EXPECT_NE(r3.err.find((dir / "checkpoint.bin").string()), std::string::npos) << r3.err;
+  EXPECT_NE(r3.err.find("corrupt"), std::string::npos) << r3.err;
+
+  // The checkpoint of another scene (same particles, another solver setting).
+  const fs::path other = fresh_dir("bake_other_scene");
+  ASSERT_EQ(seiche("bake " + q(write_scene("small.json", kBakeScene)) + " --frames 2 --set solver.iterations=3 --out " +
+                   q(other)).code, 0);
+  fs::copy_file(other / "checkpoint.bin", dir / "checkpoint.bin", fs::copy_options::overwrite_existing);
+  const Result r4 = seiche("bake --resume " + q(dir));
+  EXPECT_EQ(r4.code, 2) << r4.err;
+  EXPECT_NE(r4.err.find("another scene"), std::string::npos) << r4.err;
+}
+
+TEST(CliBake, VdbWithoutFluidWarnsAndWritesParticles) {
+  const fs::path dir = fresh_dir("bake_no_fluid");
+  const Result r = seiche("bake " + q(write_scene("nofluid.json", R"({ "particles": [ { "x": [0.5,0.5,0.5] } ],
+                                                                      "output": { "vdb": ["surface"], "mesh": true } })")) +
+                          " --frames 2 --out " + q(dir));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("warning: the scene asks for output.vdb = [surface] and output.mesh = true but has no fluid"),
+            std::string::npos)
+      << r.err;
+  EXPECT_TRUE(fs::exists(dir / "particles.0002.ply"));
+}
+
+TEST(CliBake, VdbOutputNeedsOpenVdbAndResumesToTheSameBytes) {
+  // The scene's default output asks for surface and density grids.
+  const std::string text = std::string(kBakeScene).replace(std::string(kBakeScene).find("\"vdb\": []"), 9,
+                                                           "\"vdb\": [\"surface\", \"density\", \"points\"], \"mesh\": true");
+  const fs::path scene = write_scene("small_vdb.json", text);
+  const fs::path straight = fresh_dir("bake_vdb_straight"), stopped = fresh_dir("bake_vdb_stopped");
+  const Result r = seiche("bake " + q(scene) + " --frames 6 --out " + q(straight));
+  if (r.code == 2) {  // a build without OpenVDB says how to go on
+    EXPECT_NE(r.err.find("-DSEICHE_WITH_OPENVDB=ON"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("--set output.vdb=[] --set output.mesh=false"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(straight));
+    const Result particles_only =
+        seiche("bake " + q(scene) + " --frames 1 --set output.vdb=[] --set output.mesh=false --out " + q(straight));
+    EXPECT_EQ(particles_only.code, 0) << particles_only.err;
+    GTEST_SKIP() << "built without OpenVDB";
+  }
+  ASSERT_EQ(r.code, 0) << r.err;
+  const Result stop = seiche("bake " + q(scene) + " --frames 6 --out " + q(stopped), "SEICHE_TEST_INTERRUPT_AFTER_FRAME=3");
+  ASSERT_EQ(stop.code, 130) << stop.err;
+  ASSERT_EQ(seiche("bake --resume " + q(stopped)).code, 0);
+  expect_same_files(straight, stopped);  // .vdb and .obj too, byte for byte
 }

@@ -274,6 +274,35 @@ TEST(SceneLoader, FullSceneRoundTrips) {
   EXPECT_EQ(s.colliders[2].friction, 1.5f);
 }
 
+TEST(SceneLoader, OutputBakeKeysRoundTrip) {
+  const SceneDef defaults = load("{}");
+  EXPECT_EQ(defaults.output.checkpoint_every, 10);
+  EXPECT_TRUE(defaults.output.particles);
+  EXPECT_TRUE(defaults.output.vdb_surface && defaults.output.vdb_density);
+  EXPECT_FALSE(defaults.output.vdb_points || defaults.output.vdb_velocity || defaults.output.mesh);
+  EXPECT_EQ(defaults.output.compression, "blosc");
+
+  const SceneDef s = load(R"({"output": {"checkpoint_every": 3, "particles": false, "vdb": ["v", "points"],
+    "mesh": true, "voxel_size": 0.015625, "anisotropic": true, "half_float": true, "compression": "zip"}})");
+  EXPECT_EQ(s.output.checkpoint_every, 3);
+  EXPECT_FALSE(s.output.particles);
+  EXPECT_FALSE(s.output.vdb_surface);
+  EXPECT_FALSE(s.output.vdb_density);
+  EXPECT_TRUE(s.output.vdb_points);
+  EXPECT_TRUE(s.output.vdb_velocity);
+  EXPECT_TRUE(s.output.mesh);
+  EXPECT_EQ(s.output.voxel_size, 0.015625f);
+  EXPECT_TRUE(s.output.anisotropic);
+  EXPECT_TRUE(s.output.half_float);
+  EXPECT_EQ(s.output.compression, "zip");
+
+  const SceneDef none = load(R"({"output": {"vdb": [], "compression": "none"}})");
+  EXPECT_FALSE(none.output.any_vdb());
+  EXPECT_FALSE(none.output.needs_surface());
+  EXPECT_EQ(none.output.compression, "none");
+  EXPECT_FALSE(load("{}", {"output.vdb=[]"}).output.any_vdb());  // what the CLI's advice passes
+}
+
 TEST(SceneLoader, PlaneNormalIsNormalized) {
   const SceneDef s = load(R"({"colliders": [{"plane": {"normal": [0, 0, -1e-20]}},
                                             {"plane": {"normal": [1, 1, 1]}}]})");
@@ -404,6 +433,25 @@ const BadCase kBadCases[] = {
     {"DomainInverted", R"({"domain": {"min": [2, 0, 0]}})", "domain", "along x min = 2 and max = 1"},
     {"DomainFrictionNegative", R"({"domain": {"friction": -0.1}})", "domain.friction", "must be >= 0"},
     {"FramesZero", R"({"output": {"frames": 0}})", "output.frames", "must be >= 1, got 0"},
+    // Output: bake keys
+    {"CheckpointEveryZero", R"({"output": {"checkpoint_every": 0}})", "output.checkpoint_every", "must be >= 1, got 0"},
+    {"CheckpointEveryNegative", R"({"output": {"checkpoint_every": -5}})", "output.checkpoint_every", "must be >= 1"},
+    {"CheckpointEveryFractional", R"({"output": {"checkpoint_every": 2.5}})", "output.checkpoint_every",
+     "expected an integer"},
+    {"VdbUnknownGrid", R"({"output": {"vdb": ["surface", "velocity"]}})", "output.vdb[1]",
+     "\"velocity\" is not one of"},
+    {"VdbDuplicateGrid", R"({"output": {"vdb": ["density", "points", "density"]}})", "output.vdb[2]",
+     "\"density\" is listed twice"},
+    {"VdbNotAnArray", R"({"output": {"vdb": "surface"}})", "output.vdb", "expected an array of strings"},
+    {"VdbElementNotString", R"({"output": {"vdb": ["surface", 3]}})", "output.vdb[1]", "expected a string, got 3"},
+    {"CompressionUnknown", R"({"output": {"compression": "lz4"}})", "output.compression",
+     "\"lz4\" is not one of"},
+    {"CompressionNotString", R"({"output": {"compression": true}})", "output.compression", "expected a string"},
+    {"ParticlesNotBool", R"({"output": {"particles": 1}})", "output.particles", "expected true or false, got 1"},
+    {"MeshNotBool", R"({"output": {"mesh": "yes"}})", "output.mesh", "expected true or false, got string"},
+    {"AnisotropicNotBool", R"({"output": {"anisotropic": null}})", "output.anisotropic", "expected true or false"},
+    {"HalfFloatNotBool", R"({"output": {"half_float": [true]}})", "output.half_float", "expected true or false"},
+    {"VoxelSizeNegative", R"({"output": {"voxel_size": -0.01}})", "output.voxel_size", "must be >= 0"},
     // Ranges: fluids
     {"FluidBoxMissing", R"({"fluids": [{"spacing": 0.1}]})", "fluids[0].box", "required key is missing"},
     {"FluidBoxInverted", R"({"fluids": [{"box": {"min": [0, 0.5, 0], "max": [1, 0.25, 1]}}]})", "fluids[0].box",

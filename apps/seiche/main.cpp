@@ -1,21 +1,49 @@
-// seiche: the command line. Thin: parse arguments, load the scene, run it, map errors to exit
-// codes (0 ok, 2 bad input, 3 output could not be written, 4 the simulation diverged).
+// seiche: the command line. Thin: parse arguments, load the scene, run or bake it, map errors to
+// exit codes (0 ok, 2 bad input, 3 output could not be written, 4 the simulation diverged,
+// 130 a bake stopped by Ctrl-C / SIGTERM with a checkpoint to resume from).
+//
+// Test hooks (environment variables, for tests/app_tests.cpp; not for users):
+//   SEICHE_TEST_INTERRUPT_AFTER_FRAME=k  a bake raises SIGINT after frame k's files are written,
+//                                        exactly as a Ctrl-C at that moment would
+//   SEICHE_TEST_FRAME_DELAY_MS=t         a bake sleeps t ms after each frame (so that a test can
+//                                        kill it mid-way)
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <cstdlib>
+#include <fstream>
 #include <iostream>
+#include <memory>
+#include <optional>
+#include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
+#include <unistd.h>
 
+#include "seiche/bake.hpp"
 #include "seiche/output_files.hpp"
 #include "seiche/runner.hpp"
 #include "seiche/scene_loader.hpp"
+#ifdef SEICHE_HAS_OPENVDB
+#include "seiche/export/vdb_exporter.hpp"
+#endif
 
 namespace {
 
 constexpr int kExitBadInput = 2;
 constexpr int kExitIo = 3;
 constexpr int kExitDiverged = 4;
+constexpr int kExitInterrupted = 130;  // 128 + SIGINT, what shells report for Ctrl-C
+
+/// Bad command-line input that is not a scene error (a frame range, a missing OpenVDB).
+class UsageError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
 
 struct RunArgs {
   std::string scene;  // empty = the embedded default scene
@@ -41,6 +69,150 @@ int run_command(const RunArgs& a) {
   return 0;
 }
 
+// ---- bake ----------------------------------------------------------------------------------------
+
+struct BakeArgs {
+  std::string scene;  // empty = the embedded default scene
+  std::string out;
+  std::string frames;  // "N" or "A-B"; empty = 1..output.frames
+  int threads = 0;
+  std::vector<std::string> overrides;
+  std::string resume;  // a bake folder
+};
+
+// Ctrl-C and SIGTERM: the first asks the bake to stop after the current frame (with a
+// checkpoint); the second stops at once. Files are never torn either way (atomic renames).
+std::atomic<bool> g_interrupt{false};
+static_assert(std::atomic<bool>::is_always_lock_free, "the signal handler needs a lock-free flag");
+
+extern "C" void on_interrupt(int) {
+  if (g_interrupt.exchange(true)) ::_exit(kExitInterrupted);
+  static const char note[] =
+      "\nseiche: stopping after this frame, with a checkpoint (Ctrl-C again stops at once)\n";
+  [[maybe_unused]] const ssize_t n = ::write(2, note, sizeof(note) - 1);
+}
+
+void install_interrupt_handlers() {
+  struct sigaction sa {};
+  sa.sa_handler = on_interrupt;
+  sigemptyset(&sa.sa_mask);
+  sa.sa_flags = SA_RESTART;
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+}
+
+int env_int(const char* name) {
+  const char* v = std::getenv(name);
+  return v ? std::atoi(v) : 0;
+}
+
+// "N" (frames 1..N) or "A-B", 1 <= A <= B.
+std::pair<int, int> parse_frame_range(const std::string& text) {
+  const auto bad = [&] {
+    return UsageError(fmt::format(
+        "--frames: expected N (frames 1..N) or A-B with 1 <= A <= B (frames count from 1), got \"{}\"", text));
+  };
+  auto number = [&](std::string_view s) {
+    if (s.empty() || s.size() > 9 || s.find_first_not_of("0123456789") != std::string_view::npos) throw bad();
+    return std::stoi(std::string(s));
+  };
+  const auto dash = text.find('-');
+  const int first = dash == std::string::npos ? 1 : number(std::string_view(text).substr(0, dash));
+  const int last = number(dash == std::string::npos ? std::string_view(text) : std::string_view(text).substr(dash + 1));
+  if (!(1 <= first && first <= last)) throw bad();
+  return {first, last};
+}
+
+// The exporters the scene's output section asks for, besides the PLY the bake writes itself.
+std::vector<std::unique_ptr<seiche::FrameExporter>> make_exporters(const seiche::SceneDef& scene, bool resuming) {
+  std::vector<std::unique_ptr<seiche::FrameExporter>> exporters;
+  const seiche::OutputDef& o = scene.output;
+  if (!o.any_vdb() && !o.mesh) return exporters;
+  std::vector<std::string> asked;
+  for (auto [on, grid] : {std::pair{o.vdb_surface, "surface"}, {o.vdb_density, "density"}, {o.vdb_points, "points"},
+                          {o.vdb_velocity, "v"}})
+    if (on) asked.push_back(grid);
+  const std::string what = fmt::format("{}{}{}", asked.empty() ? "" : fmt::format("output.vdb = [{}]", fmt::join(asked, ", ")),
+                                       !asked.empty() && o.mesh ? " and " : "", o.mesh ? "output.mesh = true" : "");
+  if (scene.fluids.empty()) {
+    std::cerr << fmt::format("seiche: warning: the scene asks for {} but has no fluid: writing particles only\n", what);
+    return exporters;
+  }
+#ifdef SEICHE_HAS_OPENVDB
+  if (auto e = seiche::make_vdb_exporter(scene)) exporters.push_back(std::move(e));
+#else
+  throw UsageError(fmt::format(
+      "the scene asks for {}, but this seiche was built without OpenVDB: rebuild with -DSEICHE_WITH_OPENVDB=ON{}",
+      what, resuming ? "" : ", or bake particles only with --set output.vdb=[] --set output.mesh=false"));
+#endif
+  (void)resuming;
+  return exporters;
+}
+
+std::string read_text(const std::string& file) {
+  std::ifstream in(file, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  if (!in) throw UsageError(fmt::format("{}: cannot be read", file));
+  return s.str();
+}
+
+int bake_command(const BakeArgs& a) {
+  const bool resuming = !a.resume.empty();
+  std::filesystem::path dir;
+  seiche::SceneDef scene;
+  seiche::BakeRecipe recipe;
+  if (resuming) {
+    dir = a.resume;
+    recipe = seiche::read_bake_recipe(dir);
+    scene = seiche::load_recipe_scene(recipe, dir / seiche::kBakeRecipeFile);
+  } else {
+    std::optional<std::pair<int, int>> range;
+    if (!a.frames.empty()) range = parse_frame_range(a.frames);
+    scene = a.scene.empty()
+                ? seiche::load_scene_text(seiche::default_scene_json(), "<default scene>", a.overrides)
+                : seiche::load_scene_file(a.scene, a.overrides);
+    if (!range) range = std::pair{1, scene.output.frames};
+    dir = a.out.empty() ? std::filesystem::path("out") / scene.name : std::filesystem::path(a.out);
+    recipe = seiche::make_bake_recipe(scene.name, a.scene.empty() ? "<default scene>" : a.scene,
+                                      a.scene.empty() ? std::string(seiche::default_scene_json()) : read_text(a.scene),
+                                      a.overrides, range->first, range->second);
+  }
+  const auto exporters = make_exporters(scene, resuming);
+
+  seiche::BakeOptions o;
+  o.out_dir = dir;
+  o.threads = a.threads;
+  o.resume = resuming;
+  for (const auto& e : exporters) o.exporters.push_back(e.get());
+  o.progress = &std::cerr;
+  o.summary = &std::cout;
+  o.interrupt = &g_interrupt;
+  const int interrupt_after = env_int("SEICHE_TEST_INTERRUPT_AFTER_FRAME");
+  const int delay_ms = env_int("SEICHE_TEST_FRAME_DELAY_MS");
+  if (interrupt_after > 0 || delay_ms > 0)
+    o.after_frame = [=](int frame) {
+      if (frame == interrupt_after) std::raise(SIGINT);
+      if (delay_ms > 0) std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms));
+    };
+  install_interrupt_handlers();
+
+  const seiche::BakeResult r = seiche::bake_scene(scene, recipe, o);
+  switch (r.status) {
+    case seiche::BakeResult::Status::AlreadyComplete:
+      fmt::print("{}: the bake of {} is already complete (frames {}-{}); nothing to do\n", dir.string(), scene.name,
+                 r.first_frame, r.last_frame);
+      return 0;
+    case seiche::BakeResult::Status::Interrupted:
+      std::cerr << fmt::format("seiche: interrupted after frame {} of {}; resume with: {}\n", r.frames_done,
+                               r.last_frame, seiche::resume_command(dir));
+      return kExitInterrupted;
+    case seiche::BakeResult::Status::Complete:
+      break;
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -60,6 +232,28 @@ int main(int argc, char** argv) {
   run_cmd->add_option("--set", run.overrides,
                       "Override a scene value by its JSON path, e.g. --set solver.iterations=8");
 
+  BakeArgs bake;
+  CLI::App* bake_cmd = app.add_subcommand(
+      "bake", "Simulate a scene and write every output it asks for (.ply, .vdb, .obj), with checkpoints");
+  bake_cmd->footer(
+      "Stop at any time with Ctrl-C (or SIGTERM): the current frame is finished and checkpointed, and\n"
+      "`seiche bake --resume DIR` continues bit for bit. Exit codes: 0 done, 2 bad input, 3 output could\n"
+      "not be written, 4 the simulation diverged, 130 interrupted.");
+  auto* bake_scene_opt = bake_cmd->add_option("scene", bake.scene, "Scene file (JSON); default: the built-in dam break");
+  auto* bake_out_opt = bake_cmd->add_option("--out", bake.out, "Output folder (default: out/<scene name>)");
+  auto* bake_frames_opt = bake_cmd->add_option(
+      "--frames", bake.frames, "N: frames 1..N; A-B: simulate from the start, write frames A..B (default: 1..output.frames)");
+  bake_cmd->add_option("--threads", bake.threads, "Worker threads (default: all cores)")->check(CLI::PositiveNumber);
+  auto* bake_set_opt = bake_cmd->add_option("--set", bake.overrides,
+                                            "Override a scene value by its JSON path, e.g. --set solver.iterations=8");
+  bake_cmd->add_option("--resume", bake.resume,
+                       "Continue the bake in this folder from its last checkpoint (scene, frames and overrides "
+                       "come from DIR/bake.json)")
+      ->excludes(bake_scene_opt)
+      ->excludes(bake_out_opt)
+      ->excludes(bake_frames_opt)
+      ->excludes(bake_set_opt);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -69,7 +263,14 @@ int main(int argc, char** argv) {
 
   try {
     if (*run_cmd) return run_command(run);
+    if (*bake_cmd) return bake_command(bake);
   } catch (const seiche::SceneError& e) {
+    std::cerr << "seiche: error: " << e.what() << "\n";
+    return kExitBadInput;
+  } catch (const seiche::ResumeError& e) {
+    std::cerr << "seiche: error: " << e.what() << "\n";
+    return kExitBadInput;
+  } catch (const UsageError& e) {
     std::cerr << "seiche: error: " << e.what() << "\n";
     return kExitBadInput;
   } catch (const seiche::IoError& e) {

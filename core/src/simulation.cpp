@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include <tbb/parallel_for.h>
 
@@ -220,6 +221,25 @@ void Simulation::reorder(std::span<const std::uint32_t> order) {
   if (index_remappers_.empty()) return;
   const std::vector<std::uint32_t> new_index = inverse_permutation(order);
   for (auto& remap : index_remappers_) remap(new_index);
+}
+
+void Simulation::restore_state(const ParticleStore& saved, int frames_done) {
+  const std::size_t n = store_.size();
+  if (saved.size() != n)
+    throw std::invalid_argument("Simulation::restore_state: the saved state has another particle count");
+  // order[k] = the current index of the particle that the saved state holds at k.
+  std::vector<std::uint32_t> index_of_id(n);
+  for (std::size_t i = 0; i < n; ++i) index_of_id[std::size_t(store_.id[i])] = std::uint32_t(i);
+  std::vector<std::uint32_t> order(n);
+  for (std::size_t k = 0; k < n; ++k) order[k] = index_of_id[std::size_t(saved.id[k])];
+  reorder(order);
+  auto copy = [n](auto& to, const auto& from) { std::copy(from.data(), from.data() + n, to.data()); };
+  copy(store_.x, saved.x), copy(store_.y, saved.y), copy(store_.z, saved.z);
+  copy(store_.px, saved.px), copy(store_.py, saved.py), copy(store_.pz, saved.pz);
+  copy(store_.vx, saved.vx), copy(store_.vy, saved.vy), copy(store_.vz, saved.vz);
+  copy(store_.w, saved.w), copy(store_.phase, saved.phase), copy(store_.id, saved.id);
+  frame_ = frames_done;
+  time_ = frame_ * scene_.solver.frame_dt;
 }
 
 FrameMetrics Simulation::measure() {

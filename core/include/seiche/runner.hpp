@@ -37,6 +37,9 @@ class SimulationError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// Throws SimulationError naming `frame` when the frame's state holds NaN or inf.
+void throw_if_diverged(const FrameMetrics& m, int frame);
+
 /// Runs the scene. Throws IoError (output) or SimulationError (non-finite state); the run
 /// report, if asked for, is written in every case, with the error in it.
 RunResult run_scene(const SceneDef& scene, const RunOptions& options);

@@ -59,6 +59,13 @@ class Simulation {
   /// Names of the passes this scene's pipeline runs, in order.
   std::vector<std::string> pipeline() const;
 
+  /// Continues from a saved state (a checkpoint, checkpoint.hpp): `saved` holds every state
+  /// column in the saved order, its ids a permutation of this store's ids; `frames_done` the
+  /// frames it had stepped. Reorders this store into the saved order (remapping every index held
+  /// elsewhere, as the neighbor stage does), then overwrites the state columns and the frame
+  /// count, so that stepping on is bit-identical to never having stopped.
+  void restore_state(const ParticleStore& saved, int frames_done);
+
  private:
   struct Pass {
     const char* name;

@@ -1,0 +1,82 @@
+#include "progress.hpp"
+
+#include <fmt/format.h>
+#include <fmt/ostream.h>
+#include <unistd.h>
+
+#include <algorithm>
+
+namespace seiche {
+
+Progress::Progress(std::ostream* out, int last_frame)
+    : out_(out), last_frame_(last_frame), tty_(out && ::isatty(2)) {}
+
+void Progress::frame_done(int frame, double elapsed, int session_frames, std::string_view details,
+                          std::string_view trailer) {
+  if (!out_) return;
+  const bool last = frame == last_frame_;
+  if (!tty_ && !last && session_frames != 1 && elapsed - last_print_ < 1.0) return;
+  last_print_ = elapsed;
+  const double eta = elapsed / std::max(session_frames, 1) * (last_frame_ - frame);
+  const std::string line =
+      fmt::format("frame {}/{}  {}  ETA {:.1f} s{}", frame, last_frame_, details, eta, trailer);
+  if (tty_) {
+    *out_ << "\r" << line << "\x1b[K" << (last ? "\n" : "") << std::flush;
+    line_open_ = !last;
+  } else {
+    *out_ << line << "\n" << std::flush;
+  }
+}
+
+void Progress::end_line() {
+  if (out_ && line_open_) *out_ << "\n" << std::flush;
+  line_open_ = false;
+}
+
+void print_run_summary(std::ostream& out, const SceneDef& scene, const RunResult& r,
+                       const std::vector<std::string>& pipeline) {
+  fmt::print(out,
+             "\n{}: {} frames, {} particles, {} substeps x {} iterations, {} threads, {:.2f} s\n",
+             scene.name, r.frames, r.particles, scene.solver.substeps, scene.solver.iterations,
+             r.threads, r.wall_seconds);
+  fmt::print(out, "pipeline: {}\n\n", fmt::join(pipeline, " -> "));
+  double total = 0.0;
+  for (const auto& e : r.timer.entries()) total += e.total_seconds;
+  fmt::print(out, "{:<16} {:>10} {:>10} {:>7}\n", "pass", "total ms", "ms/frame", "share");
+  for (const auto& e : r.timer.entries())
+    fmt::print(out, "{:<16} {:>10.1f} {:>10.2f} {:>6.1f}%\n", e.name, e.total_seconds * 1e3,
+               e.total_seconds * 1e3 / std::max(r.frames, 1),
+               total > 0 ? 100.0 * e.total_seconds / total : 0.0);
+  if (r.metrics.empty()) return;
+  // Error of each active constraint family: mean over frames of the frame mean, and the
+  // largest frame max.
+  auto family = [&](const char* name, auto get) {
+    double mean = 0.0, max = 0.0;
+    for (const FrameMetrics& m : r.metrics) {
+      const auto e = get(m);
+      mean += e.mean;
+      max = std::max(max, e.max);
+    }
+    fmt::print(out, "{:<16} {:>9.3f}% {:>9.3f}%\n", name, 100.0 * mean / r.metrics.size(),
+               100.0 * max);
+  };
+  fmt::print(out, "\n{:<16} {:>10} {:>10}\n", "error", "mean", "max");
+  if (r.metrics.front().fluid)
+    family("fluid density", [](const FrameMetrics& m) { return *m.fluid; });
+  if (r.metrics.front().distance)
+    family("distance", [](const FrameMetrics& m) { return *m.distance; });
+  const FrameMetrics& last = r.metrics.back();
+  fmt::print(out, "\nlast frame: kinetic energy {:.4g} J, max speed {:.3g} m/s\n",
+             last.kinetic_energy, last.max_speed);
+}
+
+std::string format_bytes(std::uint64_t bytes) {
+  if (bytes < 1000) return fmt::format("{} B", bytes);
+  const char* units[] = {"KB", "MB", "GB", "TB"};
+  double value = double(bytes) / 1000.0;
+  int unit = 0;
+  while (value >= 1000.0 && unit < 3) value /= 1000.0, ++unit;
+  return fmt::format("{:.{}f} {}", value, value < 10 ? 2 : value < 100 ? 1 : 0, units[unit]);
+}
+
+}  // namespace seiche

@@ -1,0 +1,393 @@
+// Checkpoints and the bake loop: a restored simulation continues bit for bit; damaged or foreign
+// checkpoints are refused with a message naming the file; an interrupted or failed bake keeps
+// its last complete frame and checkpoint and resumes to the same bytes as an uninterrupted one.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "seiche/bake.hpp"
+#include "seiche/checkpoint.hpp"
+#include "seiche/output_files.hpp"
+#include "seiche/scene_loader.hpp"
+#include "seiche/simulation.hpp"
+
+using namespace seiche;
+namespace fs = std::filesystem;
+
+namespace {
+
+// Every pass runs: fluid (density, vorticity, viscosity) falling around a sphere, a chain of raw
+// particles on distance constraints hanging from a pinned one, the domain's walls. About 2000
+// particles, so that the grid sort reorders the store every substep.
+const char* const kScene = R"({
+  "name": "mixed",
+  "solver": { "substeps": 4, "iterations": 2 },
+  "domain": { "min": [0, 0, 0], "max": [1, 1, 0.5] },
+  "output": { "frames": 12, "checkpoint_every": 4, "vdb": [] },
+  "colliders": [ { "sphere": { "center": [0.6, 0.15, 0.25], "radius": 0.1 } } ],
+  "fluids": [ { "box": { "min": [0, 0, 0], "max": [0.36, 0.6, 0.3] }, "spacing": 0.03,
+                "vorticity": 0.05, "viscosity": 0.02 } ],
+  "particles": [ { "x": [0.8, 0.9, 0.25], "mass": 0 }, { "x": [0.85, 0.9, 0.25] }, { "x": [0.9, 0.9, 0.25] },
+                 { "x": [0.95, 0.9, 0.25] }, { "x": [0.95, 0.85, 0.25] } ],
+  "distance_constraints": [ { "i": 0, "j": 1 }, { "i": 1, "j": 2 }, { "i": 2, "j": 3 },
+                            { "i": 3, "j": 4, "compliance": 1e-4 } ] })";
+
+SceneDef mixed_scene(const std::vector<std::string>& overrides = {}) {
+  return load_scene_text(kScene, "mixed.json", overrides);
+}
+
+BakeRecipe mixed_recipe(int first, int last, const std::vector<std::string>& overrides = {}) {
+  return make_bake_recipe("mixed", "mixed.json", kScene, overrides, first, last);
+}
+
+fs::path fresh_dir(const std::string& name) {
+  const fs::path d = fs::temp_directory_path() / ("seiche_bake_tests_" + name);
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+std::string read_bytes(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+void write_bytes(const fs::path& p, std::string_view bytes) {
+  std::ofstream(p, std::ios::binary).write(bytes.data(), std::streamsize(bytes.size()));
+}
+
+// Every state column, bit for bit.
+void expect_same_state(const ParticleStore& a, const ParticleStore& b, const std::string& what) {
+  ASSERT_EQ(a.size(), b.size()) << what;
+  const std::size_t n = a.size();
+  auto same = [n](const auto& x, const auto& y) {
+    return std::memcmp(x.data(), y.data(), n * sizeof(x[0])) == 0;
+  };
+  EXPECT_TRUE(same(a.id, b.id)) << what << ": store order (id column) differs";
+  EXPECT_TRUE(same(a.phase, b.phase)) << what << ": phase";
+  EXPECT_TRUE(same(a.w, b.w)) << what << ": w";
+  const char* names[] = {"x", "y", "z", "px", "py", "pz", "vx", "vy", "vz"};
+  const FloatColumn* ca[] = {&a.x, &a.y, &a.z, &a.px, &a.py, &a.pz, &a.vx, &a.vy, &a.vz};
+  const FloatColumn* cb[] = {&b.x, &b.y, &b.z, &b.px, &b.py, &b.pz, &b.vx, &b.vy, &b.vz};
+  for (int c = 0; c < 9; ++c) EXPECT_TRUE(same(*ca[c], *cb[c])) << what << ": column " << names[c];
+}
+
+// Records what the bake hands an exporter and writes one small file per frame: the frame
+// number, the time and a hash of the positions in id order.
+class RecordingExporter : public FrameExporter {
+ public:
+  std::string name() const override { return "record"; }
+  std::vector<fs::path> files(int frame) const override {
+    return {frame_file_name("record", frame, "txt")};
+  }
+  std::uint64_t write_frame(const FrameView& v, const fs::path& dir) override {
+    frames.push_back(v.frame);
+    const ParticleStore& s = v.particles;
+    std::vector<float> xyz(3 * s.size());
+    for (std::size_t i = 0; i < s.size(); ++i) {
+      const std::size_t k = std::size_t(s.id[i]);
+      xyz[3 * k] = s.x[i], xyz[3 * k + 1] = s.y[i], xyz[3 * k + 2] = s.z[i];
+    }
+    const std::string text =
+        std::to_string(v.frame) + " " + std::to_string(v.time) + " " +
+        std::to_string(fnv1a64({reinterpret_cast<const char*>(xyz.data()), xyz.size() * 4})) + "\n";
+    write_file_atomically(dir / files(v.frame)[0], text);
+    return text.size();
+  }
+  std::vector<int> frames;
+};
+
+// The files of a bake folder that must match between bakes (report.json holds timings).
+std::map<std::string, std::string> frame_files(const fs::path& dir) {
+  std::map<std::string, std::string> files;
+  for (const auto& e : fs::directory_iterator(dir)) {
+    const std::string name = e.path().filename().string();
+    if (name != kBakeReportFile) files[name] = read_bytes(e.path());
+  }
+  return files;
+}
+
+void expect_no_temporary_files(const fs::path& dir) {
+  for (const auto& e : fs::directory_iterator(dir))
+    EXPECT_NE(e.path().extension(), ".tmp") << "left a temporary file: " << e.path();
+}
+
+BakeOptions quiet_options(const fs::path& dir, std::vector<FrameExporter*> exporters = {}) {
+  BakeOptions o;
+  o.out_dir = dir;
+  o.threads = 2;
+  o.exporters = std::move(exporters);
+  return o;
+}
+
+}  // namespace
+
+// ---- Checkpoints ----------------------------------------------------------------------------
+
+TEST(Checkpoint, RestoredSimulationContinuesBitForBit) {
+  const SceneDef scene = mixed_scene();
+  const std::uint64_t fingerprint = mixed_recipe(1, 12).scene_fingerprint();
+  constexpr int kSaveAt = 5, kMore = 6;
+  const fs::path file = fresh_dir("roundtrip") / "checkpoint.bin";
+
+  Simulation straight(scene);
+  for (int f = 0; f < kSaveAt; ++f) straight.step_frame();
+  write_file_atomically(file, encode_checkpoint(straight, fingerprint));
+  ParticleStore at_save;  // a copy of the saved state, to see the continuation move on
+  at_save.resize(straight.particles().size());
+  std::memcpy(at_save.y.data(), straight.particles().y.data(), at_save.size() * 4);
+  // The store is in cell order, not id order: a restore that ignored the order would show.
+  bool reordered = false;
+  for (std::size_t i = 0; i < straight.particles().size(); ++i)
+    reordered |= straight.particles().id[i] != int(i);
+  EXPECT_TRUE(reordered);
+  for (int f = 0; f < kMore; ++f) straight.step_frame();
+
+  Simulation resumed(scene);
+  const Checkpoint cp = read_checkpoint(file);
+  EXPECT_EQ(cp.frame, kSaveAt);
+  EXPECT_EQ(cp.time, kSaveAt * scene.solver.frame_dt);
+  restore_checkpoint(resumed, cp, fingerprint, file);
+  EXPECT_EQ(resumed.frame(), kSaveAt);
+  expect_same_state(resumed.particles(), cp.state, "right after the restore");
+  for (int f = 0; f < kMore; ++f) resumed.step_frame();
+
+  EXPECT_EQ(resumed.frame(), straight.frame());
+  EXPECT_EQ(resumed.time(), straight.time());
+  expect_same_state(resumed.particles(), straight.particles(), "after stepping on");
+  // The continuation did something: the fluid fell between the save and the end.
+  float moved = 0.0f;
+  for (std::size_t i = 0; i < at_save.size(); ++i)
+    moved = std::max(moved, std::abs(straight.particles().y[i] - at_save.y[i]));
+  EXPECT_GT(moved, 0.01f);
+  // The distance constraints were remapped with the store: the chain still holds together.
+  const FrameMetrics m = resumed.step_frame();
+  ASSERT_TRUE(m.distance.has_value());
+  EXPECT_LT(m.distance->max, 0.25);
+}
+
+TEST(Checkpoint, DamagedFilesAreRefusedNamingTheFile) {
+  const SceneDef scene = mixed_scene();
+  Simulation sim(scene);
+  sim.step_frame();
+  const std::string good = encode_checkpoint(sim, 42);
+  const fs::path dir = fresh_dir("damaged");
+  const fs::path file = dir / "checkpoint.bin";
+
+  auto refusal = [&](std::string_view bytes) -> std::string {
+    write_bytes(file, bytes);
+    try {
+      read_checkpoint(file);
+    } catch (const ResumeError& e) {
+      return e.what();
+    }
+    return "(accepted)";
+  };
+  auto expect_refused = [&](std::string_view bytes, const std::string& why, const char* label) {
+    const std::string message = refusal(bytes);
+    EXPECT_NE(message.find(file.string()), std::string::npos) << label << ": " << message;
+    EXPECT_NE(message.find(why), std::string::npos)
+        << label << ": expected '" << why << "' in: " << message;
+  };
+
+  EXPECT_EQ(refusal(good), "(accepted)");
+  expect_refused(std::string_view(good).substr(0, good.size() - 100), "truncated",
+                 "truncated body");
+  expect_refused(std::string_view(good).substr(0, 20), "ends inside", "truncated header");
+  expect_refused("", "not a Seiche checkpoint", "empty");
+  expect_refused("PK\x03\x04 some zip file", "not a Seiche checkpoint", "other file");
+  std::string flipped = good;
+  flipped[flipped.size() / 2] ^= 0x10;  // one bit inside the columns
+  expect_refused(flipped, "checksum", "flipped bit");
+  std::string future = good;
+  future[8] = 9;  // format version 9
+  expect_refused(future, "format version 9", "newer format");
+  fs::remove(file);
+  try {
+    read_checkpoint(file);
+    ADD_FAILURE() << "a missing checkpoint was accepted";
+  } catch (const ResumeError& e) {
+    EXPECT_NE(std::string(e.what()).find(file.string()), std::string::npos) << e.what();
+  }
+}
+
+TEST(Checkpoint, CheckpointOfAnotherSceneIsRefused) {
+  const fs::path file = fresh_dir("foreign") / "checkpoint.bin";
+  Simulation sim(mixed_scene());
+  sim.step_frame();
+  const std::uint64_t fingerprint = mixed_recipe(1, 12).scene_fingerprint();
+  write_file_atomically(file, encode_checkpoint(sim, fingerprint));
+  const Checkpoint cp = read_checkpoint(file);
+
+  // Same particle count, other settings: only the fingerprint tells them apart.
+  const std::vector<std::string> other = {"solver.iterations=3"};
+  const std::uint64_t other_fingerprint = mixed_recipe(1, 12, other).scene_fingerprint();
+  EXPECT_NE(other_fingerprint, fingerprint);
+  Simulation other_sim(mixed_scene(other));
+  try {
+    restore_checkpoint(other_sim, cp, other_fingerprint, file);
+    ADD_FAILURE() << "a checkpoint of another scene was restored";
+  } catch (const ResumeError& e) {
+    EXPECT_NE(std::string(e.what()).find("another scene"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(file.string()), std::string::npos) << e.what();
+  }
+  // Another particle count, even under a matching fingerprint.
+  Simulation smaller(mixed_scene({"fluids.0.spacing=0.06"}));
+  try {
+    restore_checkpoint(smaller, cp, fingerprint, file);
+    ADD_FAILURE() << "a checkpoint with another particle count was restored";
+  } catch (const ResumeError& e) {
+    EXPECT_NE(std::string(e.what()).find("particles"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(other_sim.frame(), 0);
+}
+
+// ---- bake.json ------------------------------------------------------------------------------
+
+TEST(BakeRecipe, RoundTripsAndDetectsEdits) {
+  const fs::path dir = fresh_dir("recipe");
+  const BakeRecipe r = mixed_recipe(3, 9, {"solver.iterations=3", "output.frames=9"});
+  write_file_atomically(dir / kBakeRecipeFile, encode_bake_recipe(r));
+  const BakeRecipe back = read_bake_recipe(dir);
+  EXPECT_EQ(back.scene_json, r.scene_json);
+  EXPECT_EQ(back.overrides, r.overrides);
+  EXPECT_EQ(back.first_frame, 3);
+  EXPECT_EQ(back.last_frame, 9);
+  EXPECT_EQ(back.scene_fingerprint(), r.scene_fingerprint());
+  EXPECT_EQ(encode_bake_recipe(back), encode_bake_recipe(r));
+  const SceneDef scene = load_recipe_scene(back, dir / kBakeRecipeFile);
+  EXPECT_EQ(scene.solver.iterations, 3);
+  EXPECT_EQ(scene.output.frames, 9);
+  EXPECT_EQ(scene.name, "mixed");
+
+  std::string text = read_bytes(dir / kBakeRecipeFile);
+  text.replace(text.find("solver.iterations=3"), 19, "solver.iterations=4");
+  write_bytes(dir / kBakeRecipeFile, text);
+  try {
+    read_bake_recipe(dir);
+    ADD_FAILURE() << "an edited bake.json was accepted";
+  } catch (const ResumeError& e) {
+    EXPECT_NE(std::string(e.what()).find("bake.json"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(read_bake_recipe(dir / "missing"), ResumeError);
+}
+
+// ---- The bake loop --------------------------------------------------------------------------
+
+TEST(Bake, InterruptedBakeResumesToTheSameBytes) {
+  const SceneDef scene = mixed_scene();
+  const fs::path straight_dir = fresh_dir("straight"), stopped_dir = fresh_dir("stopped");
+
+  RecordingExporter straight_export;
+  const BakeResult straight =
+      bake_scene(scene, mixed_recipe(1, 12), quiet_options(straight_dir, {&straight_export}));
+  EXPECT_EQ(straight.status, BakeResult::Status::Complete);
+  EXPECT_EQ(straight.checkpoint_frame, 12);
+  EXPECT_EQ(straight_export.frames, (std::vector<int>{1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12}));
+  EXPECT_GT(straight.bytes_written, 12u * 2000u * 28u);
+
+  // Stop after frame 6: between checkpoints (every 4), so the interrupt writes its own.
+  std::atomic<bool> stop{false};
+  RecordingExporter first_export;
+  BakeOptions o = quiet_options(stopped_dir, {&first_export});
+  o.interrupt = &stop;
+  o.after_frame = [&](int f) { stop = f == 6; };
+  const BakeResult first = bake_scene(scene, mixed_recipe(1, 12), o);
+  EXPECT_EQ(first.status, BakeResult::Status::Interrupted);
+  EXPECT_EQ(first.frames_done, 6);
+  EXPECT_EQ(first.checkpoint_frame, 6);
+  EXPECT_EQ(read_checkpoint(stopped_dir / kCheckpointFile).frame, 6);
+  EXPECT_FALSE(fs::exists(stopped_dir / "particles.0007.ply"));
+  expect_no_temporary_files(stopped_dir);
+
+  // The resume reads the scene from bake.json, as the CLI does.
+  const BakeRecipe recipe = read_bake_recipe(stopped_dir);
+  RecordingExporter second_export;
+  BakeOptions resume = quiet_options(stopped_dir, {&second_export});
+  resume.resume = true;
+  resume.threads = 1;  // another thread count: still the same bytes
+  const BakeResult second =
+      bake_scene(load_recipe_scene(recipe, stopped_dir / kBakeRecipeFile), recipe, resume);
+  EXPECT_EQ(second.status, BakeResult::Status::Complete);
+  EXPECT_EQ(second.start_frame, 6);
+  EXPECT_EQ(second_export.frames, (std::vector<int>{7, 8, 9, 10, 11, 12}));
+
+  const auto a = frame_files(straight_dir), b = frame_files(stopped_dir);
+  EXPECT_EQ(a.size(), 12u * 2 + 2);  // ply + record per frame, checkpoint.bin, bake.json
+  ASSERT_EQ(a.size(), b.size());
+  for (const auto& [name, bytes] : a) {
+    ASSERT_TRUE(b.count(name)) << name;
+    EXPECT_TRUE(b.at(name) == bytes) << name << " differs after the resume";
+  }
+
+  // Resuming a complete bake does nothing.
+  RecordingExporter third_export;
+  BakeOptions again = quiet_options(stopped_dir, {&third_export});
+  again.resume = true;
+  EXPECT_EQ(bake_scene(scene, recipe, again).status, BakeResult::Status::AlreadyComplete);
+  EXPECT_TRUE(third_export.frames.empty());
+}
+
+TEST(Bake, FrameRangeWritesOnlyItsFramesFromAFullSimulation) {
+  const SceneDef scene = mixed_scene();
+  const fs::path full_dir = fresh_dir("range_full"), part_dir = fresh_dir("range_part");
+  bake_scene(scene, mixed_recipe(1, 5), quiet_options(full_dir));
+  RecordingExporter exporter;
+  const BakeResult r = bake_scene(scene, mixed_recipe(3, 5), quiet_options(part_dir, {&exporter}));
+  EXPECT_EQ(r.files_written, 6u);
+  EXPECT_EQ(exporter.frames, (std::vector<int>{3, 4, 5}));
+  for (int f = 1; f <= 6; ++f)
+    EXPECT_EQ(fs::exists(part_dir / frame_file_name("particles", f, "ply")), f >= 3 && f <= 5) << f;
+  EXPECT_EQ(read_bytes(part_dir / "particles.0003.ply"),
+            read_bytes(full_dir / "particles.0003.ply"));
+  EXPECT_EQ(read_bytes(part_dir / "particles.0005.ply"),
+            read_bytes(full_dir / "particles.0005.ply"));
+}
+
+TEST(Bake, FailedWriteKeepsTheLastFrameAndCheckpoint) {
+  const SceneDef scene = mixed_scene({"output.checkpoint_every=2"});
+  const std::vector<std::string> overrides = {"output.checkpoint_every=2"};
+  const fs::path dir = fresh_dir("failed"), reference = fresh_dir("failed_reference");
+  // A folder where frame 5's file should go: its rename fails, like a full disk would.
+  fs::create_directories(dir / "particles.0005.ply" / "blocker");
+  try {
+    bake_scene(scene, mixed_recipe(1, 8, overrides), quiet_options(dir));
+    ADD_FAILURE() << "the bake did not report the failed write";
+  } catch (const IoError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find((dir / "particles.0005.ply").string()), std::string::npos) << what;
+    EXPECT_NE(what.find("frames up to 4 are complete"), std::string::npos) << what;
+    EXPECT_NE(what.find("checkpoint of frame 4"), std::string::npos) << what;
+    EXPECT_NE(what.find("seiche bake --resume"), std::string::npos) << what;
+  }
+  EXPECT_TRUE(fs::exists(dir / "particles.0004.ply"));
+  EXPECT_EQ(read_checkpoint(dir / kCheckpointFile).frame, 4);
+  expect_no_temporary_files(dir);
+
+  fs::remove_all(dir / "particles.0005.ply");
+  BakeOptions resume = quiet_options(dir);
+  resume.resume = true;
+  const BakeRecipe recipe = read_bake_recipe(dir);
+  EXPECT_EQ(
+      bake_scene(load_recipe_scene(recipe, dir / kBakeRecipeFile), recipe, resume).start_frame, 4);
+  bake_scene(scene, mixed_recipe(1, 8, overrides), quiet_options(reference));
+  for (int f = 1; f <= 8; ++f) {
+    const std::string name = frame_file_name("particles", f, "ply");
+    EXPECT_TRUE(read_bytes(dir / name) == read_bytes(reference / name)) << name;
+  }
+}
+
+TEST(Bake, UnwritableFolderFailsBeforeSimulating) {
+  RecordingExporter exporter;
+  EXPECT_THROW(
+      bake_scene(mixed_scene(), mixed_recipe(1, 3), quiet_options("/dev/null/seiche", {&exporter})),
+      IoError);
+  EXPECT_TRUE(exporter.frames.empty());
+}
