@@ -359,6 +359,26 @@ TEST(CliBake, FailedFrameWriteIsExitCode3AndKeepsTheLastCompleteFrame) {
   expect_same_files(straight_bake(), dir);
 }
 
+TEST(CliBake, FileSizeLimitActsLikeAFullDisk) {
+  const fs::path dir = fresh_dir("bake_full_disk");
+  // ulimit -f (512-byte blocks in /bin/sh): 92 KB holds a frame's PLY (68 KB) but not the
+  // frame-5 checkpoint (115 KB), so the bake runs out of room mid-way, as on a full disk.
+  const Result r = seiche("bake " + q(write_scene("small.json", kBakeScene)) + " --out " + q(dir),
+                          "ulimit -f 180;");
+  EXPECT_EQ(r.code, 3) << r.err;
+  EXPECT_NE(r.err.find((dir / "checkpoint.bin").string() + ": cannot write: File too large"), std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("frames up to 5 are complete"), std::string::npos) << r.err;
+  for (const char* f : {"particles.0005.ply", "bake.json"}) EXPECT_TRUE(fs::exists(dir / f)) << f;
+  EXPECT_FALSE(fs::exists(dir / "particles.0006.ply"));
+  EXPECT_FALSE(fs::exists(dir / "checkpoint.bin"));
+  expect_no_temporary_files(dir);
+  // With room again, a resume starts over and writes the same bytes as a straight bake.
+  const Result resumed = seiche("bake --resume " + q(dir));
+  ASSERT_EQ(resumed.code, 0) << resumed.err;
+  expect_same_files(straight_bake(), dir);
+}
+
 TEST(CliBake, ResumeOfAMissingFolderOrDamagedCheckpointIsBadInput) {
   const fs::path missing = work_dir() / "no_such_bake";
   const Result r = seiche("bake --resume " + q(missing));

@@ -99,6 +99,9 @@ void install_interrupt_handlers() {
   sa.sa_flags = SA_RESTART;
   sigaction(SIGINT, &sa, nullptr);
   sigaction(SIGTERM, &sa, nullptr);
+  // A file size limit (ulimit -f) then makes write() fail with EFBIG, reported like a full
+  // disk (exit 3, the last complete frame kept), instead of killing the process mid-write.
+  std::signal(SIGXFSZ, SIG_IGN);
 }
 
 int env_int(const char* name) {
