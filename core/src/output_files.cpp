@@ -67,9 +67,8 @@ std::string encode_particles_ply(const ParticleStore& s) {
       "property float vx\nproperty float vy\nproperty float vz\n"
       "property int id\nend_header\n",
       n);
-  // Index of each id: the store is in cell order, exports are in id order.
-  std::vector<std::uint32_t> index_of_id(n);
-  for (std::size_t i = 0; i < n; ++i) index_of_id[std::size_t(s.id[i])] = std::uint32_t(i);
+  // The store is in cell order, exports are in id order.
+  const std::vector<std::uint32_t> index_of_id = s.index_of_id();
   constexpr std::size_t kRecord = 6 * sizeof(float) + sizeof(std::int32_t);
   const std::size_t header = out.size();
   out.resize(header + n * kRecord);

@@ -56,6 +56,12 @@ void ParticleStore::reorder(std::span<const std::uint32_t> order) {
   });
 }
 
+std::vector<std::uint32_t> ParticleStore::index_of_id() const {
+  std::vector<std::uint32_t> index(size_);
+  for (std::size_t i = 0; i < size_; ++i) index[std::size_t(id[i])] = std::uint32_t(i);
+  return index;
+}
+
 std::size_t ParticleStore::bytes() const {
   std::size_t b = 0;
   for (const FloatColumn* c : {&x, &y, &z, &px, &py, &pz, &vx, &vy, &vz, &w, &density, &lambda,

@@ -228,8 +228,7 @@ void Simulation::restore_state(const ParticleStore& saved, int frames_done) {
   if (saved.size() != n)
     throw std::invalid_argument("Simulation::restore_state: the saved state has another particle count");
   // order[k] = the current index of the particle that the saved state holds at k.
-  std::vector<std::uint32_t> index_of_id(n);
-  for (std::size_t i = 0; i < n; ++i) index_of_id[std::size_t(store_.id[i])] = std::uint32_t(i);
+  const std::vector<std::uint32_t> index_of_id = store_.index_of_id();
   std::vector<std::uint32_t> order(n);
   for (std::size_t k = 0; k < n; ++k) order[k] = index_of_id[std::size_t(saved.id[k])];
   reorder(order);

@@ -8,9 +8,7 @@
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/LevelSetUtil.h>
 
-#include <algorithm>
 #include <cmath>
-#include <numeric>
 #include <optional>
 #include <stdexcept>
 #include <utility>
@@ -61,38 +59,12 @@ std::optional<SettingsProblem> find_problem(const FluidExportSettings& s) {
   return std::nullopt;
 }
 
-/// Store indices of the fluid particles, in id order. Ids are creation indices (0..n-1), so a
-/// table indexed by id orders them in linear time; other ids fall back to a sort.
-std::vector<std::size_t> fluid_indices_by_id(const ParticleStore& store) {
-  const std::size_t n = store.size();
-  std::vector<std::size_t> fluid;
-  fluid.reserve(n);
-  std::int64_t max_id = -1;
-  bool ids_in_range = true;
-  for (std::size_t i = 0; i < n; ++i) {
-    if (phase_material(store.phase[i]) != Material::Fluid) continue;
-    fluid.push_back(i);
-    ids_in_range = ids_in_range && store.id[i] >= 0;
-    max_id = std::max<std::int64_t>(max_id, store.id[i]);
-  }
-  if (ids_in_range && max_id < std::int64_t(2 * n + 16)) {
-    constexpr std::size_t kNone = ~std::size_t(0);
-    std::vector<std::size_t> by_id(std::size_t(max_id + 1), kNone);
-    bool unique = true;
-    for (const std::size_t i : fluid) {
-      std::size_t& slot = by_id[std::size_t(store.id[i])];
-      unique = unique && slot == kNone;
-      slot = i;
-    }
-    if (unique) {
-      fluid.clear();
-      for (const std::size_t i : by_id)
-        if (i != kNone) fluid.push_back(i);
-      return fluid;
-    }
-  }
-  std::stable_sort(fluid.begin(), fluid.end(),
-                   [&](std::size_t a, std::size_t b) { return store.id[a] < store.id[b]; });
+/// Store indices of the fluid particles, in id order.
+std::vector<std::uint32_t> fluid_indices_by_id(const ParticleStore& store) {
+  std::vector<std::uint32_t> fluid;
+  fluid.reserve(store.size());
+  for (const std::uint32_t i : store.index_of_id())
+    if (phase_material(store.phase[i]) == Material::Fluid) fluid.push_back(i);
   return fluid;
 }
 
@@ -180,13 +152,13 @@ FluidExportSettings fluid_export_settings(const SceneDef& scene) {
 }
 
 FluidParticles gather_fluid_particles(const ParticleStore& store) {
-  const std::vector<std::size_t> order = fluid_indices_by_id(store);
+  const std::vector<std::uint32_t> order = fluid_indices_by_id(store);
   FluidParticles p;
   const std::size_t n = order.size();
   p.x.resize(n), p.y.resize(n), p.z.resize(n), p.vx.resize(n), p.vy.resize(n), p.vz.resize(n),
       p.id.resize(n);
   for (std::size_t k = 0; k < n; ++k) {
-    const std::size_t i = order[k];
+    const std::uint32_t i = order[k];
     p.x[k] = store.x[i], p.y[k] = store.y[i], p.z[k] = store.z[i];
     p.vx[k] = store.vx[i], p.vy[k] = store.vy[i], p.vz[k] = store.vz[i];
     p.id[k] = store.id[i];
@@ -219,26 +191,19 @@ EncodedFluidFrame encode_fluid_frame(const FluidParticles& p, const FluidExportS
   EncodedFluidFrame out;
   if (s.any_vdb_grid()) {
     openvdb::GridCPtrVec grids;
-    if (s.surface) {
-      surface->setName("surface");
-      surface->setCreator(creator);
-      surface->setSaveFloatAsHalf(s.half_float);
-      grids.push_back(surface);
-    }
+    auto add_grid = [&](const openvdb::GridBase::Ptr& grid, const char* name) {
+      grid->setName(name);
+      grid->setCreator(creator);
+      grid->setSaveFloatAsHalf(s.half_float);
+      grids.push_back(grid);
+    };
+    if (s.surface) add_grid(surface, "surface");
     if (s.density) {
       openvdb::FloatGrid::Ptr fog = surface->deepCopy();
       openvdb::tools::sdfToFogVolume(*fog);
-      fog->setName("density");
-      fog->setCreator(creator);
-      fog->setSaveFloatAsHalf(s.half_float);
-      grids.push_back(fog);
+      add_grid(fog, "density");
     }
-    if (s.velocity) {
-      velocity->setName("v");
-      velocity->setCreator(creator);
-      velocity->setSaveFloatAsHalf(s.half_float);
-      grids.push_back(velocity);
-    }
+    if (s.velocity) add_grid(velocity, "v");
     if (s.points) {
       const exporting::FluidPointArrays arrays{p.x, p.y, p.z, p.vx, p.vy, p.vz, p.id};
       auto points = exporting::fluid_points_grid(

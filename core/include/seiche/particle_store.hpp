@@ -47,6 +47,10 @@ class ParticleStore {
   /// caller with inverse_permutation(order) (Simulation::reorder does both).
   void reorder(std::span<const std::uint32_t> order);
 
+  /// Store index of every id: index_of_id()[id[i]] == i. Ids are creation indices, a
+  /// permutation of [0, size()); exports and checkpoints use this to go back to id order.
+  std::vector<std::uint32_t> index_of_id() const;
+
   /// Bytes held by all columns.
   std::size_t bytes() const;
 
