@@ -2,6 +2,7 @@
 // checkpoints are refused with a message naming the file; an interrupted or failed bake keeps
 // its last complete frame and checkpoint and resumes to the same bytes as an uninterrupted one.
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <atomic>
 #include <cstring>
@@ -349,6 +350,27 @@ TEST(Bake, FrameRangeWritesOnlyItsFramesFromAFullSimulation) {
             read_bytes(full_dir / "particles.0003.ply"));
   EXPECT_EQ(read_bytes(part_dir / "particles.0005.ply"),
             read_bytes(full_dir / "particles.0005.ply"));
+}
+
+TEST(Bake, ReportHasTheExportTimeAndBytesOfEveryFrame) {
+  const SceneDef scene = mixed_scene();  // checkpoint_every 4
+  const fs::path dir = fresh_dir("report");
+  RecordingExporter exporter;
+  bake_scene(scene, mixed_recipe(2, 5), quiet_options(dir, {&exporter}));
+  const nlohmann::json report = nlohmann::json::parse(read_bytes(dir / kBakeReportFile));
+  ASSERT_EQ(report["frames"].size(), 5u);
+  // Frame 1 is simulated but not written; checkpoints (all of one size) follow frames 4 and 5.
+  const std::uint64_t checkpoint = fs::file_size(dir / kCheckpointFile);
+  for (const auto& f : report["frames"]) {
+    const int frame = f["frame"].get<int>();
+    std::uint64_t expected = 0;
+    if (frame >= 2)
+      expected += fs::file_size(dir / frame_file_name("particles", frame, "ply")) +
+                  fs::file_size(dir / exporter.files(frame)[0]);
+    if (frame >= 4) expected += checkpoint;
+    EXPECT_EQ(f["bytes_written"].get<std::uint64_t>(), expected) << "frame " << frame;
+    EXPECT_GE(f["export_ms"].get<double>(), 0.0) << "frame " << frame;
+  }
 }
 
 TEST(Bake, FailedWriteKeepsTheLastFrameAndCheckpoint) {

@@ -290,21 +290,25 @@ BakeResult bake_scene(const SceneDef& scene, const BakeRecipe& recipe, const Bak
       result.simulate_seconds += seconds_since(frame_start);
 
       auto export_start = Clock::now();
+      std::uint64_t frame_bytes = 0;
       if (f >= recipe.first_frame) {
-        result.bytes_written += writer.write(sim, f, result.files_written);
+        frame_bytes += writer.write(sim, f, result.files_written);
         last_written = f;
       }
-      result.export_seconds += seconds_since(export_start);
+      double frame_export_seconds = seconds_since(export_start);
       if (options.after_frame) options.after_frame(f);
       const bool stop = interrupted() && f < recipe.last_frame;  // read once: a checkpoint if so
       if (f % every == 0 || f == recipe.last_frame || stop) {
         export_start = Clock::now();
         const std::string cp = encode_checkpoint(sim, fingerprint);
         write_file_atomically(checkpoint_file, cp);
-        result.bytes_written += cp.size();
+        frame_bytes += cp.size();
         result.checkpoint_frame = f;
-        result.export_seconds += seconds_since(export_start);
+        frame_export_seconds += seconds_since(export_start);
       }
+      result.bytes_written += frame_bytes;
+      result.export_seconds += frame_export_seconds;
+      report.add_frame_output(1e3 * frame_export_seconds, frame_bytes);
 
       const int session_frames = f - result.start_frame;
       progress.frame_done(f, seconds_since(start), session_frames,

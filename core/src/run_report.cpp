@@ -38,6 +38,12 @@ void RunReport::add_frame(const FrameMetrics& m, const PassTimer& timer) {
   doc_["frames"].push_back(std::move(f));
 }
 
+void RunReport::add_frame_output(double export_ms, std::uint64_t bytes) {
+  nlohmann::json& f = doc_["frames"].back();
+  f["export_ms"] = export_ms;
+  f["bytes_written"] = bytes;
+}
+
 void RunReport::set_error(const std::string& message) {
   doc_["status"] = "error";
   doc_["error"] = message;
