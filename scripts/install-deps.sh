@@ -6,7 +6,7 @@ set -euo pipefail
 packages=(
   g++ cmake ninja-build ccache make
   libeigen3-dev libtbb-dev libxsimd-dev xtl-dev
-  nlohmann-json3-dev libcli11-dev libfmt-dev
+  nlohmann-json3-dev libcli11-dev libfmt-dev libtinyobjloader-dev
   libgtest-dev libbenchmark-dev
   libopenvdb-dev libboost-iostreams-dev libblosc-dev
   python3 python3-matplotlib

@@ -445,3 +445,84 @@ TEST(CliBake, VdbOutputNeedsOpenVdbAndResumesToTheSameBytes) {
   ASSERT_EQ(seiche("bake --resume " + q(stopped)).code, 0);
   expect_same_files(straight, stopped);  // .vdb and .obj too, byte for byte
 }
+
+// ---- Cloth ------------------------------------------------------------------------------------
+
+namespace {
+
+// A cloth read from an OBJ next to the scene (a relative path) and a sheet that falls onto it.
+const char* kClothScene = R"({ "name": "cloths",
+  "solver": { "substeps": 4, "iterations": 2 },
+  "domain": { "min": [-1,0,-1], "max": [1,1.5,1] },
+  "output": { "frames": 8, "checkpoint_every": 3 },
+  "cloths": [ { "name": "patch", "mesh": { "file": "quad.obj", "translate": [0, 0.6, 0] }, "pins": [0, 1] },
+              { "name": "sheet", "sheet": { "origin": [-0.3,0.9,-0.3], "size": [0.6,0.6], "resolution": [12,12] },
+                "self_collision": true, "thickness": 0.04 } ] })";
+
+// A 2 x 2 quad of 9 vertices (4 quads as polygons, as an OBJ exporter writes them).
+const char* kQuadObj = R"(v -0.5 0 -0.5
+v 0.5 0 -0.5
+v -0.5 0 0
+v 0.5 0 0
+v -0.5 0 0.5
+v 0 0 0.5
+v 0.5 0 0.5
+v 0 0 -0.5
+v 0 0 0
+f 1 8 9 3
+f 8 2 4 9
+f 3 9 6 5
+f 9 4 7 6
+)";
+
+}  // namespace
+
+TEST(CliCloth, BakeWritesAnObjPerClothAndFrameAndResumesToTheSameBytes) {
+  const fs::path scene_dir = work_dir() / "cloth_scene";
+  fs::create_directories(scene_dir);
+  std::ofstream(scene_dir / "quad.obj") << kQuadObj;
+  std::ofstream(scene_dir / "cloths.json") << kClothScene;
+  const fs::path straight = fresh_dir("cloth_straight"), resumed = fresh_dir("cloth_resumed");
+  // Run from another working directory: the OBJ is found next to the scene.
+  const Result r = seiche("bake " + q(scene_dir / "cloths.json") + " --out " + q(straight));
+  ASSERT_EQ(r.code, 0) << r.err;
+  for (const char* f : {"patch.0001.obj", "patch.0008.obj", "sheet.0008.obj", "particles.0008.ply"})
+    EXPECT_TRUE(fs::exists(straight / f)) << f;
+  // The OBJ keeps the input's faces: 4 quads.
+  const std::string patch = slurp(straight / "patch.0008.obj");
+  std::size_t quads = 0;
+  for (std::size_t at = patch.find("\nf "); at != std::string::npos; at = patch.find("\nf ", at + 1)) {
+    const std::string line = patch.substr(at + 1, patch.find('\n', at + 1) - at - 1);
+    quads += std::count(line.begin(), line.end(), ' ') == 4 ? 1 : 0;
+  }
+  EXPECT_EQ(quads, 4u) << patch;
+
+  const Result stopped = seiche("bake " + q(scene_dir / "cloths.json") + " --out " + q(resumed),
+                                "SEICHE_TEST_INTERRUPT_AFTER_FRAME=4");
+  EXPECT_EQ(stopped.code, 130) << stopped.err;
+  const Result again = seiche("bake --resume " + q(resumed) + " --threads 1");
+  ASSERT_EQ(again.code, 0) << again.err;
+  expect_same_files(straight, resumed);
+}
+
+TEST(CliCloth, MissingObjIsBadInputNamingSceneFieldAndFile) {
+  const fs::path scene = write_scene("missing_obj.json", R"({ "cloths": [ { "mesh": { "file": "nowhere.obj" } } ] })");
+  const Result r = seiche("run " + q(scene) + " --frames 1 --out " + q(work_dir() / "out_missing_obj"));
+  EXPECT_EQ(r.code, 2) << r.err;
+  for (const std::string s : {scene.string(), std::string("cloths[0].mesh.file"), std::string("nowhere.obj")})
+    EXPECT_NE(r.err.find(s), std::string::npos) << s << " missing from: " << r.err;
+  EXPECT_FALSE(fs::exists(work_dir() / "out_missing_obj"));
+}
+
+TEST(CliCloth, NonManifoldObjIsBadInput) {
+  const fs::path dir = work_dir() / "nonmanifold";
+  fs::create_directories(dir);
+  // Three triangles on the edge 1-2.
+  std::ofstream(dir / "fan.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nf 1 2 3\nf 2 1 4\nf 1 2 5\n";
+  std::ofstream(dir / "fan.json") << R"({ "domain": { "min": [-2,-2,-2], "max": [2,2,2] },
+    "cloths": [ { "mesh": { "file": "fan.obj" } } ] })";
+  const Result r = seiche("run " + q(dir / "fan.json") + " --frames 1");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("fan.obj"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("non-manifold"), std::string::npos) << r.err;
+}

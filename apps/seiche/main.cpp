@@ -25,6 +25,7 @@
 #include <unistd.h>
 
 #include "seiche/bake.hpp"
+#include "seiche/cloth_obj_exporter.hpp"
 #include "seiche/output_files.hpp"
 #include "seiche/runner.hpp"
 #include "seiche/scene_loader.hpp"
@@ -126,9 +127,11 @@ std::pair<int, int> parse_frame_range(const std::string& text) {
   return {first, last};
 }
 
-// The exporters the scene's output section asks for, besides the PLY the bake writes itself.
+// The exporters of the scene, besides the PLY the bake writes itself: every cloth's OBJ, and the
+// fluid's .vdb and mesh that the output section asks for.
 std::vector<std::unique_ptr<seiche::FrameExporter>> make_exporters(const seiche::SceneDef& scene, bool resuming) {
   std::vector<std::unique_ptr<seiche::FrameExporter>> exporters;
+  if (auto e = seiche::make_cloth_obj_exporter(scene)) exporters.push_back(std::move(e));
   const seiche::OutputDef& o = scene.output;
   if (!o.any_vdb() && !o.mesh) return exporters;
   std::vector<std::string> asked;
@@ -138,6 +141,7 @@ std::vector<std::unique_ptr<seiche::FrameExporter>> make_exporters(const seiche:
   const std::string what = fmt::format("{}{}{}", asked.empty() ? "" : fmt::format("output.vdb = [{}]", fmt::join(asked, ", ")),
                                        !asked.empty() && o.mesh ? " and " : "", o.mesh ? "output.mesh = true" : "");
   if (scene.fluids.empty()) {
+    if (!scene.cloths.empty()) return exporters;  // the fluid's output keys do not concern cloths
     std::cerr << fmt::format("seiche: warning: the scene asks for {} but has no fluid: writing particles only\n", what);
     return exporters;
   }
@@ -180,6 +184,7 @@ int bake_command(const BakeArgs& a) {
     recipe = seiche::make_bake_recipe(scene.name, a.scene.empty() ? "<default scene>" : a.scene,
                                       a.scene.empty() ? std::string(seiche::default_scene_json()) : read_text(a.scene),
                                       a.overrides, range->first, range->second);
+    recipe.scene_dir = scene.base_dir;
   }
   const auto exporters = make_exporters(scene, resuming);
 

@@ -71,6 +71,7 @@ std::string encode_bake_recipe(const BakeRecipe& r) {
   doc["seiche_version"] = r.seiche_version;
   doc["scene_name"] = r.scene_name;
   doc["scene_source"] = r.scene_source;
+  doc["scene_dir"] = r.scene_dir;
   doc["first_frame"] = r.first_frame;
   doc["last_frame"] = r.last_frame;
   doc["overrides"] = r.overrides;
@@ -98,6 +99,7 @@ BakeRecipe read_bake_recipe(const fs::path& dir) {
     r.scene_name = doc.at("scene_name").get<std::string>();
     r.scene_source = doc.at("scene_source").get<std::string>();
     r.scene_json = doc.at("scene").get<std::string>();
+    r.scene_dir = doc.value("scene_dir", std::string());
     r.overrides = doc.at("overrides").get<std::vector<std::string>>();
     r.first_frame = doc.at("first_frame").get<int>();
     r.last_frame = doc.at("last_frame").get<int>();
@@ -121,7 +123,7 @@ BakeRecipe read_bake_recipe(const fs::path& dir) {
 }
 
 SceneDef load_recipe_scene(const BakeRecipe& recipe, const fs::path& recipe_file) {
-  SceneDef scene = load_scene_text(recipe.scene_json, recipe_file.string(), recipe.overrides);
+  SceneDef scene = load_scene_text(recipe.scene_json, recipe_file.string(), recipe.overrides, recipe.scene_dir);
   scene.name = recipe.scene_name;
   return scene;
 }

@@ -231,6 +231,46 @@ void JsonReader::read(std::string_view key, Vec3& out) {
   out = result;
 }
 
+namespace {
+// An array of `count` elements (0 = any length) converted one by one.
+template <class T, class Convert>
+std::vector<T> read_array(const Json& v, const std::string& path, const std::string& file, std::size_t count,
+                          Convert convert) {
+  if (!v.is_array()) {
+    const std::string what = count ? fmt::format("an array of {} numbers", count) : std::string("an array of integers");
+    fail(file, path, "expected " + what + ", got " + describe_value(v));
+  }
+  if (count && v.size() != count) fail(file, path, fmt::format("expected {} numbers, got {}", count, v.size()));
+  std::vector<T> result;
+  result.reserve(v.size());
+  for (std::size_t i = 0; i < v.size(); ++i) result.push_back(convert(v[i], element_path(path, i)));
+  return result;
+}
+}  // namespace
+
+void JsonReader::read(std::string_view key, std::array<float, 2>& out, Range range) {
+  const Json* v = find(key);
+  if (!v) return;
+  const auto a = read_array<float>(*v, path_of(key), *file_, 2,
+                                   [&](const Json& e, const std::string& p) { return to_float(e, p, *file_, range); });
+  out = {a[0], a[1]};
+}
+
+void JsonReader::read(std::string_view key, std::array<int, 2>& out, Range range) {
+  const Json* v = find(key);
+  if (!v) return;
+  const auto a = read_array<int>(*v, path_of(key), *file_, 2,
+                                 [&](const Json& e, const std::string& p) { return to_int(e, p, *file_, range); });
+  out = {a[0], a[1]};
+}
+
+void JsonReader::read(std::string_view key, std::vector<int>& out, Range range) {
+  const Json* v = find(key);
+  if (!v) return;
+  out = read_array<int>(*v, path_of(key), *file_, 0,
+                        [&](const Json& e, const std::string& p) { return to_int(e, p, *file_, range); });
+}
+
 JsonReader JsonReader::object(std::string_view key) {
   const Json* v = find(key);
   if (!v) fail_missing(key);

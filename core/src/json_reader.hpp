@@ -4,6 +4,7 @@
 // and suggests the closest known one. Internal to core: the scene loader is its only user.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <limits>
 #include <optional>
@@ -82,6 +83,11 @@ class JsonReader {
   void read_string_set(std::string_view key, std::vector<std::string>& out,
                        const std::vector<std::string>& allowed);
   void read(std::string_view key, Vec3& out);  ///< an array of exactly 3 finite floats
+  /// An array of exactly 2 numbers, each in `range`.
+  void read(std::string_view key, std::array<float, 2>& out, Range range = {});
+  void read(std::string_view key, std::array<int, 2>& out, Range range = {});
+  /// An array of integers (any length), each in `range`.
+  void read(std::string_view key, std::vector<int>& out, Range range = {});
 
   /// A nested object that must be present (see require() on when to ask for it).
   JsonReader object(std::string_view key);

@@ -65,6 +65,17 @@ void print_run_summary(std::ostream& out, const SceneDef& scene, const RunResult
     family("fluid density", [](const FrameMetrics& m) { return *m.fluid; });
   if (r.metrics.front().distance)
     family("distance", [](const FrameMetrics& m) { return *m.distance; });
+  if (r.metrics.front().cloth) {
+    family("cloth strain", [](const FrameMetrics& m) {
+      return DistanceConstraintError{m.cloth->strain_mean, m.cloth->strain_max};
+    });
+    // Bending error is an angle: shown in degrees, not percent.
+    double mean = 0.0, max = 0.0;
+    for (const FrameMetrics& m : r.metrics) mean += m.cloth->bending_mean, max = std::max(max, m.cloth->bending_max);
+    constexpr double kDegrees = 180.0 / 3.14159265358979323846;
+    fmt::print(out, "{:<16} {:>8.3f}deg {:>7.3f}deg\n", "cloth bending", kDegrees * mean / r.metrics.size(),
+               kDegrees * max);
+  }
   const FrameMetrics& last = r.metrics.back();
   fmt::print(out, "\nlast frame: kinetic energy {:.4g} J, max speed {:.3g} m/s\n",
              last.kinetic_energy, last.max_speed);

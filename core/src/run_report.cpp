@@ -32,6 +32,10 @@ void RunReport::add_frame(const FrameMetrics& m, const PassTimer& timer) {
   f["particles"] = m.particles;
   if (m.fluid) f["fluid_density_error"] = {{"mean", m.fluid->mean}, {"max", m.fluid->max}};
   if (m.distance) f["distance_error"] = {{"mean", m.distance->mean}, {"max", m.distance->max}};
+  if (m.cloth) {
+    f["cloth_strain"] = {{"mean", m.cloth->strain_mean}, {"max", m.cloth->strain_max}};
+    f["cloth_bending_error"] = {{"mean", m.cloth->bending_mean}, {"max", m.cloth->bending_max}};
+  }
   f["kinetic_energy"] = m.kinetic_energy;
   f["max_speed"] = m.max_speed;
   f["non_finite"] = m.non_finite;

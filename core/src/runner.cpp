@@ -10,6 +10,7 @@
 
 #include "progress.hpp"
 #include "run_report.hpp"
+#include "seiche/cloth_obj_exporter.hpp"
 #include "seiche/output_files.hpp"
 #include "seiche/simulation.hpp"
 
@@ -37,6 +38,7 @@ RunResult run_scene(const SceneDef& scene, const RunOptions& options) {
   const int frames = options.frames > 0 ? options.frames : scene.output.frames;
 
   Simulation sim(scene);  // before any folder is made: a scene that cannot be built writes nothing
+  const std::unique_ptr<FrameExporter> cloth_obj = make_cloth_obj_exporter(scene);
   if (!options.out_dir.empty()) prepare_output_directory(options.out_dir);
   if (!options.report.empty() && options.report.has_parent_path())
     prepare_output_directory(options.report.parent_path());
@@ -57,9 +59,11 @@ RunResult run_scene(const SceneDef& scene, const RunOptions& options) {
       report.add_frame(m, sim.timer());
       result.metrics.push_back(m);
       throw_if_diverged(m, f);
-      if (!options.out_dir.empty())
+      if (!options.out_dir.empty()) {
         write_file_atomically(options.out_dir / frame_file_name("particles", f, "ply"),
                               encode_particles_ply(sim.particles()));
+        if (cloth_obj) cloth_obj->write_frame({sim.particles(), scene, f, sim.time()}, options.out_dir);
+      }
       result.frames = f;
       const std::chrono::duration<double> elapsed = Clock::now() - start;
       const std::chrono::duration<double> frame_time = Clock::now() - frame_start;

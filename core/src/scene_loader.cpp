@@ -16,6 +16,7 @@
 
 #include <fmt/format.h>
 
+#include "cloth_mesh.hpp"
 #include "json_reader.hpp"
 
 namespace seiche {
@@ -43,7 +44,8 @@ constexpr double kMaxParticles = 50e6;           // all blocks together (32-bit 
 constexpr double kMinKernelRadius = 1.5, kMaxKernelRadius = 4.0;
 constexpr double kMinSubstep = 1e-6;             // s: below this, float time steps underflow
 constexpr double kMinMass = 1e-12;               // kg: 1 / mass must be a finite float
-constexpr double kLatticeTolerance = 1e-4;       // of a spacing, absorbs rounding of box edges
+constexpr double kLatticeTolerance = 1e-4;
+constexpr double kMaxSheetResolution = 4096;     // vertices per side: 16 M vertices in all       // of a spacing, absorbs rounding of box edges
 const std::string kCommandLine = "(command line)";
 
 std::string format_vec(const Vec3& v) { return fmt::format("[{}, {}, {}]", v[0], v[1], v[2]); }
@@ -246,6 +248,7 @@ SolverDef read_solver(JsonReader r) {
   r.read("iterations", s.iterations, Range::closed(1, kMaxStepsPerFrame));
   r.read("gravity", s.gravity);
   r.read("relaxation", s.relaxation, Range::at_least(0));
+  r.read("damping", s.damping, Range::at_least(0));
   r.read("tensile_k", s.tensile_k, Range::at_least(0));
   r.read("tensile_n", s.tensile_n, Range::closed(1, 8));
   r.read("tensile_dq", s.tensile_dq, Range::open(0, 1));
@@ -340,18 +343,33 @@ DistanceConstraintDef read_distance_constraint(JsonReader r) {
   return c;
 }
 
+ClothMeshDef read_mesh_placement(JsonReader r) {
+  ClothMeshDef m;
+  r.read("translate", m.translate);
+  r.read("scale", m.scale, Range::above(0));
+  r.require("file");
+  r.read("file", m.file);
+  r.finish();
+  if (m.file.empty()) r.fail_at("file", "must not be empty");
+  return m;
+}
+
 ColliderDef read_collider(JsonReader r) {
   ColliderDef c;
   r.read("friction", c.friction, Range::at_least(0));
   auto plane = r.optional_object("plane");
   auto box = r.optional_object("box");
   auto sphere = r.optional_object("sphere");
+  auto capsule = r.optional_object("capsule");
+  auto mesh = r.optional_object("mesh");
   r.finish();
 
-  const int shapes = int(plane.has_value()) + int(box.has_value()) + int(sphere.has_value());
+  const int shapes = int(plane.has_value()) + int(box.has_value()) + int(sphere.has_value()) +
+                     int(capsule.has_value()) + int(mesh.has_value());
   if (shapes != 1)
-    r.fail_here(shapes == 0 ? "needs a shape: one of \"plane\", \"box\", \"sphere\""
-                            : "has more than one of \"plane\", \"box\", \"sphere\"; a collider has exactly one shape");
+    r.fail_here(shapes == 0 ? "needs a shape: one of \"plane\", \"box\", \"sphere\", \"capsule\", \"mesh\""
+                            : "has more than one of \"plane\", \"box\", \"sphere\", \"capsule\", \"mesh\"; "
+                              "a collider has exactly one shape");
   if (plane) {
     c.shape = ColliderDef::Shape::Plane;
     plane->read("point", c.point);
@@ -364,17 +382,87 @@ ColliderDef read_collider(JsonReader r) {
   } else if (box) {
     c.shape = ColliderDef::Shape::Box;
     c.box = read_box(*box);
-  } else {
+  } else if (sphere) {
     c.shape = ColliderDef::Shape::Sphere;
     sphere->read("center", c.center);
     sphere->require("radius");
     sphere->read("radius", c.radius, Range::above(0));
     sphere->finish();
+  } else if (capsule) {
+    c.shape = ColliderDef::Shape::Capsule;
+    capsule->require("a");
+    capsule->require("b");
+    capsule->require("radius");
+    capsule->read("a", c.end_a);
+    capsule->read("b", c.end_b);
+    capsule->read("radius", c.radius, Range::above(0));
+    capsule->finish();
+  } else {
+    c.shape = ColliderDef::Shape::Mesh;
+    mesh->read("voxel_size", c.voxel_size, Range::at_least(0));
+    c.mesh = read_mesh_placement(*mesh);
   }
   return c;
 }
 
+SheetDef read_sheet(JsonReader r) {
+  SheetDef s;
+  r.read("size", s.size, Range::above(0));
+  r.read("resolution", s.resolution, Range::closed(2, kMaxSheetResolution));
+  r.read("plane", s.plane);
+  r.require("origin");
+  r.read("origin", s.origin);
+  r.finish();
+  const std::string& p = s.plane;
+  if (p.size() != 2 || p[0] == p[1] || std::string("xyz").find(p[0]) == std::string::npos ||
+      std::string("xyz").find(p[1]) == std::string::npos)
+    r.fail_at("plane", fmt::format("\"{}\" is not two different axes of x, y, z (e.g. \"xz\", \"xy\")", p));
+  return s;
+}
+
+ClothDef read_cloth(JsonReader r, std::size_t index) {
+  ClothDef c;
+  c.name = fmt::format("cloth{}", index);
+  r.read("name", c.name);
+  if (c.name.empty()) r.fail_at("name", "must not be empty");
+  r.read("mass_per_area", c.mass_per_area, Range::above(0));
+  r.read("thickness", c.thickness, Range::above(0));
+  r.read("stretch_compliance", c.stretch_compliance, Range::at_least(0));
+  r.read("bend_compliance", c.bend_compliance, Range::above(0));
+  r.read_choice("bending", c.bending, {"dihedral", "isometric"});
+  r.read("tethers", c.tethers);
+  r.read("self_collision", c.self_collision);
+  r.read("friction", c.friction, Range::at_least(0));
+  r.read("pins", c.pins, Range::at_least(0));
+  if (auto box = r.optional_object("pin_box")) c.pin_box = read_box(*box);
+  r.read("velocity", c.velocity);
+  auto sheet = r.optional_object("sheet");
+  auto mesh = r.optional_object("mesh");
+  r.finish();
+  if (sheet.has_value() == mesh.has_value())
+    r.fail_here(sheet ? "has both \"sheet\" and \"mesh\"; a cloth is one of them"
+                      : "needs a shape: \"sheet\" (generated) or \"mesh\" (an OBJ file)");
+  if (sheet) c.sheet = read_sheet(*sheet);
+  if (mesh) c.mesh = read_mesh_placement(*mesh);
+  return c;
+}
+
 // ---- Checks across sections ------------------------------------------------------------------
+
+std::string resolve_mesh_path(const std::string& file, const std::string& base_dir) {
+  const std::filesystem::path p(file);
+  if (p.is_absolute() || base_dir.empty()) return file;
+  return (std::filesystem::path(base_dir) / p).lexically_normal().string();
+}
+
+// A mesh file that is not there is the scene's error (it names the file); what is wrong inside
+// an OBJ is reported by the OBJ reader, naming the OBJ.
+void check_mesh_file(const std::string& mesh_file, const std::string& file, const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(mesh_file, ec))
+    fail(file, path, fmt::format("cannot open the mesh {}: {}", mesh_file,
+                                 std::filesystem::exists(mesh_file, ec) ? "not a regular file" : "no such file"));
+}
 
 bool inside(const Vec3& p, const DomainDef& d) {
   for (int a = 0; a < 3; ++a)
@@ -451,10 +539,57 @@ void check_distance_constraints(const SceneDef& scene, const std::string& file) 
   }
 }
 
-SceneDef read_scene(const Json& document, const std::string& file, const std::string& default_name) {
+// Every cloth's mesh is built here once, so that a broken OBJ or a pin past the last vertex is
+// reported before anything runs; mesh paths become absolute (a resumed bake may run elsewhere).
+void check_cloths(SceneDef& scene, const std::string& file) {
+  std::vector<std::string> names{"particles", scene.name};
+  for (std::size_t k = 0; k < scene.cloths.size(); ++k) {
+    ClothDef& c = scene.cloths[k];
+    const std::string path = element_path("cloths", k);
+    if (std::find(names.begin(), names.end(), c.name) != names.end())
+      fail(file, path + ".name",
+           fmt::format("\"{}\" is taken (by the particle files, the scene's own output or another cloth); "
+                       "output files are named after it",
+                       c.name));
+    names.push_back(c.name);
+    ClothMesh mesh;
+    if (c.mesh) {
+      c.mesh->file = resolve_mesh_path(c.mesh->file, scene.base_dir);
+      check_mesh_file(c.mesh->file, file, path + ".mesh.file");
+      mesh = read_obj_mesh(c.mesh->file, *c.mesh, path + ".mesh");
+    } else {
+      mesh = make_sheet(*c.sheet, file, path + ".sheet");
+    }
+    build_topology(mesh, c.mesh ? c.mesh->file : file, path + (c.mesh ? ".mesh.file" : ".sheet"));
+    const auto n = static_cast<long long>(mesh.vertex_count());
+    for (std::size_t p = 0; p < c.pins.size(); ++p) {
+      if (c.pins[p] >= n)
+        fail(file, element_path(path + ".pins", p),
+             fmt::format("vertex {} is out of range: the cloth has {} vertices (0..{})", c.pins[p], n, n - 1));
+    }
+    for (const Vec3& x : mesh.positions) {
+      if (!inside(x, scene.domain))
+        fail(file, path + (c.mesh ? ".mesh" : ".sheet"),
+             fmt::format("vertex at {} is outside the domain {}..{}", format_vec(x), format_vec(scene.domain.min),
+                         format_vec(scene.domain.max)));
+    }
+  }
+  for (std::size_t k = 0; k < scene.colliders.size(); ++k) {
+    ColliderDef& c = scene.colliders[k];
+    if (c.shape != ColliderDef::Shape::Mesh) continue;
+    c.mesh.file = resolve_mesh_path(c.mesh.file, scene.base_dir);
+    check_mesh_file(c.mesh.file, file, element_path("colliders", k) + ".mesh.file");
+    const ClothMesh mesh = read_obj_mesh(c.mesh.file, c.mesh, element_path("colliders", k) + ".mesh");
+    (void)mesh;  // closedness is checked when the field is built (Simulation), with the same message
+  }
+}
+
+SceneDef read_scene(const Json& document, const std::string& file, const std::string& default_name,
+                    const std::filesystem::path& base_dir) {
   JsonReader root(document, "", file);
   SceneDef scene;
   scene.name = default_name;
+  scene.base_dir = base_dir.string();
   root.read("name", scene.name);
   if (scene.name.empty()) root.fail_at("name", "must not be empty");
   if (auto r = root.optional_object("solver")) scene.solver = read_solver(*r);
@@ -465,21 +600,23 @@ SceneDef read_scene(const Json& document, const std::string& file, const std::st
   for (const JsonReader& r : root.objects("distance_constraints"))
     scene.distance_constraints.push_back(read_distance_constraint(r));
   for (const JsonReader& r : root.objects("colliders")) scene.colliders.push_back(read_collider(r));
+  for (const JsonReader& r : root.objects("cloths")) scene.cloths.push_back(read_cloth(r, scene.cloths.size()));
   root.finish();
 
   check_fluids(scene, file);
   check_particles(scene, file);
   check_distance_constraints(scene, file);
+  check_cloths(scene, file);
   return scene;
 }
 
 SceneDef load_scene(std::string_view text, const std::string& file, std::span<const std::string> overrides,
-                    const std::string& default_name) {
+                    const std::string& default_name, const std::filesystem::path& base_dir) {
   Json document = parse_json(text, file);
   if (!document.is_object())
     fail(file, "", "expected a JSON object at the top, got " + detail::describe_value(document));
   for (const std::string& o : overrides) apply_override(document, o);
-  return read_scene(document, file, default_name);
+  return read_scene(document, file, default_name, base_dir);
 }
 
 std::string read_file(const std::filesystem::path& path, const std::string& file) {
@@ -498,13 +635,15 @@ std::string read_file(const std::filesystem::path& path, const std::string& file
 }  // namespace
 
 SceneDef load_scene_text(std::string_view json_text, std::string_view source,
-                         std::span<const std::string> overrides) {
-  return load_scene(json_text, std::string(source), overrides, SceneDef{}.name);
+                         std::span<const std::string> overrides, const std::filesystem::path& base_dir) {
+  return load_scene(json_text, std::string(source), overrides, SceneDef{}.name, base_dir);
 }
 
 SceneDef load_scene_file(const std::filesystem::path& file, std::span<const std::string> overrides) {
   const std::string source = file.string();
-  return load_scene(read_file(file, source), source, overrides, file.stem().string());
+  std::error_code ec;
+  const std::filesystem::path dir = std::filesystem::absolute(file, ec).parent_path();
+  return load_scene(read_file(file, source), source, overrides, file.stem().string(), dir);
 }
 
 }  // namespace seiche

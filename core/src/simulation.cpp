@@ -7,6 +7,9 @@
 #include <tbb/parallel_for.h>
 
 #include "blocked_reduce.hpp"
+#include "cloth_solver.hpp"
+#include "mesh_sdf.hpp"
+#include "particle_contact_stage.hpp"
 #include "distance_solver.hpp"
 #include "fluid_solver.hpp"
 #include "neighborhood.hpp"
@@ -28,7 +31,27 @@ std::array<std::size_t, 3> lattice_counts(const FluidDef& f) {
   return n;
 }
 
-kernels::CollisionShape to_shape(const ColliderDef& c) {
+// Mesh colliders: the field's samples are a 64th of the mesh's largest side unless the scene
+// says otherwise, over the mesh's box grown by 4 samples.
+std::unique_ptr<MeshSdf> build_collider_sdf(const ColliderDef& c, std::size_t index) {
+  const std::string path = "colliders[" + std::to_string(index) + "].mesh";
+  const ClothMesh mesh = read_obj_mesh(c.mesh.file, c.mesh, path);
+  float voxel = c.voxel_size;
+  if (voxel <= 0.0f) {
+    float extent = 0.0f;
+    for (int a = 0; a < 3; ++a) {
+      float lo = INFINITY, hi = -INFINITY;
+      for (const Vec3& x : mesh.positions) lo = std::min(lo, x[a]), hi = std::max(hi, x[a]);
+      extent = std::max(extent, hi - lo);
+    }
+    voxel = std::max(extent / 64.0f, 1e-6f);
+  }
+  auto sdf = std::make_unique<MeshSdf>();
+  build_mesh_sdf(mesh, voxel, 4.0f * voxel, c.mesh.file, path + ".file", *sdf);
+  return sdf;
+}
+
+kernels::CollisionShape to_shape(const ColliderDef& c, const MeshSdf* sdf) {
   kernels::CollisionShape s;
   s.friction = c.friction;
   switch (c.shape) {
@@ -47,6 +70,16 @@ kernels::CollisionShape to_shape(const ColliderDef& c) {
       std::copy(c.center.begin(), c.center.end(), s.a);
       s.radius = c.radius;
       break;
+    case ColliderDef::Shape::Capsule:
+      s.kind = kernels::CollisionShape::Kind::Capsule;
+      std::copy(c.end_a.begin(), c.end_a.end(), s.a);
+      std::copy(c.end_b.begin(), c.end_b.end(), s.b);
+      s.radius = c.radius;
+      break;
+    case ColliderDef::Shape::Mesh:
+      s.kind = kernels::CollisionShape::Kind::Sdf;
+      s.sdf = &sdf->grid;
+      break;
   }
   return s;
 }
@@ -60,7 +93,8 @@ Simulation::Simulation(const SceneDef& scene) : scene_(scene) {
   assemble_pipeline();
 }
 
-// Raw particles first (their index is the scene's index), then the fluid blocks' lattices.
+// Raw particles first (their index is the scene's index), then the fluid blocks' lattices, then
+// the cloths' vertices.
 void Simulation::create_particles() {
   std::size_t fluid_count = 0;
   for (const FluidDef& f : scene_.fluids) {
@@ -68,7 +102,9 @@ void Simulation::create_particles() {
     fluid_count += n[0] * n[1] * n[2];
   }
   const std::size_t raw_count = scene_.particles.size();
-  store_.resize(raw_count + fluid_count);
+  if (!scene_.cloths.empty()) cloth_ = std::make_unique<ClothSolver>(scene_);
+  const std::size_t cloth_count = cloth_ ? cloth_->vertex_count() : 0;
+  store_.resize(raw_count + fluid_count + cloth_count);
   for (std::size_t k = 0; k < raw_count; ++k) {
     const ParticleDef& p = scene_.particles[k];
     store_.x[k] = p.x[0], store_.y[k] = p.x[1], store_.z[k] = p.x[2];
@@ -106,6 +142,16 @@ void Simulation::create_particles() {
     store_.id[k] = std::int32_t(k);
     store_.px[k] = store_.x[k], store_.py[k] = store_.y[k], store_.pz[k] = store_.z[k];
   }
+  if (cloth_) {
+    const std::size_t first = raw_count + fluid_count;
+    cloth_->create(store_, first, view());
+    for (std::size_t k = first; k < store_.size(); ++k)
+      store_.px[k] = store_.x[k], store_.py[k] = store_.y[k], store_.pz[k] = store_.z[k];
+    index_remappers_.push_back([this](std::span<const std::uint32_t> m) { cloth_->remap(m); });
+    if (ParticleContactStage::needed(scene_))
+      contacts_ = std::make_unique<ParticleContactStage>(*cloth_, scene_.domain,
+                                                         fluid_ ? fluid_->particle_radius() : 0.0f);
+  }
 }
 
 void Simulation::create_distance_constraints() {
@@ -132,7 +178,12 @@ void Simulation::create_colliders() {
   }
   collision_params_->domain_friction = scene_.domain.friction;
   collision_params_->fluid_radius = fluid_ ? fluid_->particle_radius() : 0.0f;
-  for (const ColliderDef& c : scene_.colliders) colliders_.push_back(to_shape(c));
+  if (cloth_) collision_params_->cloth_radius = cloth_->collision_radius().data();
+  for (std::size_t k = 0; k < scene_.colliders.size(); ++k) {
+    const ColliderDef& c = scene_.colliders[k];
+    if (c.shape == ColliderDef::Shape::Mesh) mesh_sdfs_.push_back(build_collider_sdf(c, k));
+    colliders_.push_back(to_shape(c, c.shape == ColliderDef::Shape::Mesh ? mesh_sdfs_.back().get() : nullptr));
+  }
 }
 
 // Only what this scene needs: a pass whose material or coefficient is absent is not built.
@@ -140,15 +191,33 @@ void Simulation::assemble_pipeline() {
   if (distance_) {
     begin_substep_passes_.push_back({"distance", [this](const StepContext&) { distance_->begin_substep(); }});
   }
+  if (cloth_) {
+    begin_substep_passes_.push_back({"cloth", [this](const StepContext&) { cloth_->begin_substep(); }});
+  }
   if (fluid_) {
     constraint_passes_.push_back({"fluid density", [this](const StepContext&) { fluid_->solve_density(); }});
   }
   if (distance_) {
     constraint_passes_.push_back({"distance", [this](const StepContext& c) { distance_->solve(view(), c.dt); }});
   }
+  if (cloth_) {
+    constraint_passes_.push_back({"cloth stretch", [this](const StepContext& c) { cloth_->solve_stretch(view(), c.dt); }});
+    if (cloth_->has_bending())
+      constraint_passes_.push_back({"cloth bending", [this](const StepContext& c) { cloth_->solve_bending(view(), c.dt); }});
+    if (cloth_->has_tethers())
+      constraint_passes_.push_back({"tethers", [this](const StepContext&) { cloth_->solve_tethers(view()); }});
+  }
+  if (contacts_) {
+    constraint_passes_.push_back({"particle contacts", [this](const StepContext&) { contacts_->solve(view()); }});
+  }
   constraint_passes_.push_back({"collisions", [this](const StepContext&) {
                                   kernels::solve_collisions(view(), *collision_params_, colliders_);
                                 }});
+  if (scene_.solver.damping > 0.0f) {
+    velocity_passes_.push_back({"damping", [this](const StepContext& c) {
+                                  kernels::damp_velocities(view(), std::exp(-scene_.solver.damping * c.dt));
+                                }});
+  }
   if (fluid_ && fluid_->has_vorticity()) {
     velocity_passes_.push_back({"vorticity", [this](const StepContext& c) { fluid_->apply_vorticity_confinement(c.dt); }});
   }
@@ -173,6 +242,7 @@ kernels::ParticleView Simulation::view() {
 std::vector<std::string> Simulation::pipeline() const {
   std::vector<std::string> names{"predict"};
   if (neighborhood_) names.push_back("neighbors");
+  if (contacts_) names.push_back("contact pairs");
   for (const Pass& p : constraint_passes_) names.push_back(p.name);
   names.push_back("update");
   for (const Pass& p : velocity_passes_) names.push_back(p.name);
@@ -195,6 +265,7 @@ void Simulation::substep(StepContext& ctx) {
   const float* g = scene_.solver.gravity.data();
   timer_.time("predict", [&] { kernels::predict_positions(view(), ctx.dt, g); });
   if (neighborhood_) timer_.time("neighbors", [&] { find_neighbors(); });
+  if (contacts_) timer_.time("contact pairs", [&] { contacts_->find_candidates(store_, neighborhood_.get()); });
   for (const Pass& p : begin_substep_passes_) p.run(ctx);
   for (ctx.iteration = 0; ctx.iteration < scene_.solver.iterations; ++ctx.iteration)
     for (const Pass& p : constraint_passes_) timer_.time(p.name, [&] { p.run(ctx); });
@@ -281,6 +352,7 @@ FrameMetrics Simulation::measure() {
     m.fluid = fluid_->measure();
   }
   if (distance_) m.distance = distance_->measure(view());
+  if (cloth_) m.cloth = cloth_->measure(view());
   return m;
 }
 

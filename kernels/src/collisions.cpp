@@ -1,9 +1,9 @@
 #include "seiche/kernels/collisions.hpp"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
-
-#include <tbb/parallel_for.h>
 
 #include "seiche/kernels/phase.hpp"
 
@@ -54,7 +54,8 @@ inline void collide_domain(Point& p, const Point& x, const CollisionParams& c, f
 inline void collide_shape(Point& p, const Point& x, const CollisionShape& s, float r) {
   switch (s.kind) {
     case CollisionShape::Kind::Plane: {
-      const float d = (p.x - s.a[0]) * s.b[0] + (p.y - s.a[1]) * s.b[1] + (p.z - s.a[2]) * s.b[2] - r;
+      const float d =
+          (p.x - s.a[0]) * s.b[0] + (p.y - s.a[1]) * s.b[1] + (p.z - s.a[2]) * s.b[2] - r;
       if (d < 0.0f) resolve_contact(p, x, s.b, -d, s.friction);
       break;
     }
@@ -66,6 +67,33 @@ inline void collide_shape(Point& p, const Point& x, const CollisionShape& s, flo
       float n[3] = {0.0f, 1.0f, 0.0f};  // at the exact center: push up
       if (len > 1e-12f) n[0] = dx / len, n[1] = dy / len, n[2] = dz / len;
       resolve_contact(p, x, n, depth, s.friction);
+      break;
+    }
+    case CollisionShape::Kind::Capsule: {
+      // Closest point on the segment a-b, then as a sphere around it (a zero-length segment is
+      // a sphere around a).
+      const float ab[3] = {s.b[0] - s.a[0], s.b[1] - s.a[1], s.b[2] - s.a[2]};
+      const float ab2 = ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2];
+      float t = 0.0f;
+      if (ab2 > 1e-24f) {
+        t = ((p.x - s.a[0]) * ab[0] + (p.y - s.a[1]) * ab[1] + (p.z - s.a[2]) * ab[2]) / ab2;
+        t = std::clamp(t, 0.0f, 1.0f);
+      }
+      const float dx = p.x - (s.a[0] + t * ab[0]), dy = p.y - (s.a[1] + t * ab[1]),
+                  dz = p.z - (s.a[2] + t * ab[2]);
+      const float len = std::sqrt(dx * dx + dy * dy + dz * dz);
+      const float depth = s.radius + r - len;
+      if (depth <= 0.0f) break;
+      float n[3] = {0.0f, 1.0f, 0.0f};  // exactly on the axis: push up
+      if (len > 1e-12f) n[0] = dx / len, n[1] = dy / len, n[2] = dz / len;
+      resolve_contact(p, x, n, depth, s.friction);
+      break;
+    }
+    case CollisionShape::Kind::Sdf: {
+      // Outside the sampled box the field knows nothing: no contact.
+      float distance = 0.0f, n[3];
+      if (s.sdf == nullptr || !s.sdf->sample(p.x, p.y, p.z, distance, n)) break;
+      if (distance < r) resolve_contact(p, x, n, r - distance, s.friction);
       break;
     }
     case CollisionShape::Kind::Box: {
@@ -89,6 +117,18 @@ inline void collide_shape(Point& p, const Point& x, const CollisionShape& s, flo
   }
 }
 
+// A particle's collision radius: fluid_radius for fluid, its cloth's half thickness for cloth.
+inline float particle_radius(std::uint32_t phase, const CollisionParams& c) {
+  switch (phase_material(phase)) {
+    case Material::Fluid:
+      return c.fluid_radius;
+    case Material::Cloth:
+      return c.cloth_radius != nullptr ? c.cloth_radius[phase >> 8] : 0.0f;
+    default:
+      return 0.0f;
+  }
+}
+
 }  // namespace
 
 void solve_collisions(const ParticleView& p, const CollisionParams& params,
@@ -96,7 +136,7 @@ void solve_collisions(const ParticleView& p, const CollisionParams& params,
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, p.n, 2048), [&](const auto& range) {
     for (std::size_t i = range.begin(); i != range.end(); ++i) {
       if (p.w[i] <= 0.0f) continue;
-      const float r = phase_material(p.phase[i]) == Material::Fluid ? params.fluid_radius : 0.0f;
+      const float r = particle_radius(p.phase[i], params);
       Point q{p.px[i], p.py[i], p.pz[i]};
       const Point x{p.x[i], p.y[i], p.z[i]};
       for (const CollisionShape& s : shapes) collide_shape(q, x, s, r);

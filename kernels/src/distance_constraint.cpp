@@ -1,9 +1,13 @@
+// XPBD distance constraints (distance_constraint.hpp has the math). Coloring: the greedy
+// coloring of graph_coloring.hpp on the pairs. Solve: color by color, vectorized lane =
+// constraint (colored_batches.hpp), the same formula for every constraint.
 #include "seiche/kernels/distance_constraint.hpp"
 
 #include <algorithm>
 #include <cmath>
 
-#include <tbb/parallel_for.h>
+#include "colored_batches.hpp"
+#include "seiche/kernels/graph_coloring.hpp"
 
 namespace seiche::kernels {
 
@@ -13,40 +17,14 @@ std::vector<std::uint32_t> color_distance_constraints(std::span<const std::uint3
                                                       std::span<const float> compliance,
                                                       std::size_t particle_count,
                                                       DistanceConstraints& out) {
+  // Greedy coloring of the pairs (graph_coloring.hpp): each constraint takes the lowest color
+  // that neither endpoint uses yet; constraints of one color stay in input order.
   const std::size_t m = i.size();
-  // Greedy: each constraint takes the lowest color that neither endpoint uses yet. Colors in
-  // use per particle are kept as a growing list of 64-bit masks.
-  std::vector<std::vector<std::uint64_t>> used(particle_count);
-  std::vector<std::uint32_t> color(m);
-  std::uint32_t num_colors = 0;
-  for (std::size_t c = 0; c < m; ++c) {
-    auto& ui = used[i[c]];
-    auto& uj = used[j[c]];
-    std::uint32_t k = 0;
-    for (;; ++k) {
-      const std::size_t word = k / 64;
-      const std::uint64_t bit = std::uint64_t(1) << (k % 64);
-      const bool in_i = word < ui.size() && (ui[word] & bit);
-      const bool in_j = word < uj.size() && (uj[word] & bit);
-      if (!in_i && !in_j) break;
-    }
-    const std::size_t word = k / 64;
-    const std::uint64_t bit = std::uint64_t(1) << (k % 64);
-    if (ui.size() <= word) ui.resize(word + 1, 0);
-    if (uj.size() <= word) uj.resize(word + 1, 0);
-    ui[word] |= bit;
-    uj[word] |= bit;
-    color[c] = k;
-    num_colors = std::max(num_colors, k + 1);
-  }
-
-  // Counting sort by color, stable.
-  out.color_start.assign(num_colors + 1, 0);
-  for (std::size_t c = 0; c < m; ++c) ++out.color_start[color[c] + 1];
-  for (std::uint32_t k = 0; k < num_colors; ++k) out.color_start[k + 1] += out.color_start[k];
-  std::vector<std::uint32_t> source(m);
-  std::vector<std::uint32_t> cursor(out.color_start.begin(), out.color_start.end() - 1);
-  for (std::size_t c = 0; c < m; ++c) source[cursor[color[c]]++] = std::uint32_t(c);
+  std::vector<std::uint32_t> pairs(2 * m);
+  for (std::size_t c = 0; c < m; ++c) pairs[2 * c] = i[c], pairs[2 * c + 1] = j[c];
+  Coloring coloring = color_constraints(pairs, 2, particle_count);
+  out.color_start = std::move(coloring.color_start);
+  std::vector<std::uint32_t> source = std::move(coloring.order);
 
   out.i.resize(m);
   out.j.resize(m);
@@ -62,34 +40,46 @@ std::vector<std::uint32_t> color_distance_constraints(std::span<const std::uint3
   return source;
 }
 
+namespace {
+
+using colored::V3;
+
+/// One XPBD step of distance constraint(s) between p[0] and p[1] (the formula of the header,
+/// T = float or Floats): returns dlambda (0 where skipped) and the corrections.
+template <class T>
+SEICHE_INLINE inline T distance_step(const V3<T> p[2], const T w[2], const T& rest, const T& alpha,
+                                     const T& lambda, V3<T> dp[2]) {
+  const T zero(0.0f), one(1.0f);
+  const T denom = w[0] + w[1] + alpha;
+  const V3<T> d = p[0] - p[1];
+  const T len = colored::vsqrt(dot(d, d));
+  // Skipped: both ends pinned and rigid (nothing can move), or coincident (no direction).
+  const colored::MaskOf<T> ok = (denom > zero) & (len > T(1e-9f));
+  const T C = len - rest;
+  const T dlambda =
+      colored::select(ok, (-C - alpha * lambda) / colored::select(ok, denom, one), zero);
+  const T s = dlambda / colored::select(ok, len, one);  // dlambda n = s d
+  dp[0] = d * (w[0] * s);
+  dp[1] = d * (-(w[1] * s));
+  return dlambda;
+}
+
+}  // namespace
+
 void solve_distance_constraints(const ParticleView& p, DistanceConstraints& c, float dt) {
   const float inv_dt2 = 1.0f / (dt * dt);
-  for (std::size_t color = 0; color + 1 < c.color_start.size(); ++color) {
-    tbb::parallel_for(
-        tbb::blocked_range<std::size_t>(c.color_start[color], c.color_start[color + 1], 512),
-        [&](const auto& r) {
-          for (std::size_t k = r.begin(); k != r.end(); ++k) {
-            const std::uint32_t a = c.i[k], b = c.j[k];
-            const float wa = p.w[a], wb = p.w[b];
-            const float alpha = c.compliance[k] * inv_dt2;
-            const float denom = wa + wb + alpha;
-            if (denom <= 0.0f) continue;  // both pinned and rigid: nothing can move
-            const float dx = p.px[a] - p.px[b], dy = p.py[a] - p.py[b], dz = p.pz[a] - p.pz[b];
-            const float len = std::sqrt(dx * dx + dy * dy + dz * dz);
-            if (len <= 1e-9f) continue;  // coincident: no direction
-            const float C = len - c.rest_length[k];
-            const float dlambda = (-C - alpha * c.lambda[k]) / denom;
-            c.lambda[k] += dlambda;
-            const float s = dlambda / len;  // dlambda * n = s * d
-            p.px[a] += wa * s * dx;
-            p.py[a] += wa * s * dy;
-            p.pz[a] += wa * s * dz;
-            p.px[b] -= wb * s * dx;
-            p.py[b] -= wb * s * dy;
-            p.pz[b] -= wb * s * dz;
-          }
-        });
-  }
+  const float* const compliance = c.compliance.data();
+  const float* const rest_length = c.rest_length.data();
+  float* const lambda = c.lambda.data();
+  colored::solve_colored<2>(
+      p, c.color_start, {c.i.data(), c.j.data()},
+      [=](const colored::Batch& batch, const V3<simd::Floats> x[2], const simd::Floats w[2],
+          V3<simd::Floats> dp[2]) {
+        const simd::Floats alpha = batch.load(compliance) * simd::Floats(inv_dt2);
+        const simd::Floats l = batch.load(lambda);
+        const simd::Floats dlambda = distance_step(x, w, batch.load(rest_length), alpha, l, dp);
+        batch.store(lambda, l + dlambda);
+      });
 }
 
 DistanceError distance_constraint_error(const ParticleView& p, const DistanceConstraints& c) {

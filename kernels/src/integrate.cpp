@@ -58,4 +58,15 @@ void update_velocities(const ParticleView& p, float dt) {
   });
 }
 
+void damp_velocities(const ParticleView& p, float factor) {
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, p.n, kGrain), [=, &p](const auto& r) {
+    for (std::size_t i = r.begin(); i != r.end(); ++i) {
+      if (p.w[i] <= 0.0f) continue;  // a kinematic particle keeps its velocity
+      p.vx[i] *= factor;
+      p.vy[i] *= factor;
+      p.vz[i] *= factor;
+    }
+  });
+}
+
 }  // namespace seiche::kernels

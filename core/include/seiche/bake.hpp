@@ -41,6 +41,9 @@ struct BakeRecipe {
   std::string seiche_version;          ///< the version that started the bake
   std::string scene_name;              ///< the scene's name (a file's stem when it has none)
   std::string scene_source;            ///< the scene file, or "<default scene>" (for messages)
+  /// Absolute folder of the scene file ("" for the default scene): relative mesh paths in the
+  /// scene are resolved against it, also when a resume runs from another working directory.
+  std::string scene_dir;
   std::string scene_json;              ///< the scene's text, as read
   std::vector<std::string> overrides;  ///< --set KEY=VALUE, applied on top of scene_json
   int first_frame = 1;                 ///< frames first_frame..last_frame are written

@@ -17,6 +17,13 @@ struct DistanceConstraintError {
   double max = 0.0;
 };
 
+struct ClothError {
+  double strain_mean = 0.0;   ///< mean |l - l0| / l0 over the stretch constraints (edges)
+  double strain_max = 0.0;
+  double bending_mean = 0.0;  ///< mean |theta - theta0| over the hinges (rad)
+  double bending_max = 0.0;
+};
+
 struct FrameMetrics {
   int frame = 0;                  ///< 1-based
   double time = 0.0;              ///< simulated time at the end of the frame (s)
@@ -26,6 +33,7 @@ struct FrameMetrics {
   std::size_t non_finite = 0;     ///< count of NaN / inf values in positions and velocities
   std::optional<FluidError> fluid;
   std::optional<DistanceConstraintError> distance;
+  std::optional<ClothError> cloth;
 };
 
 }  // namespace seiche

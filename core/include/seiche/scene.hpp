@@ -28,6 +28,8 @@ struct SolverDef {
   float tensile_k = 0.1f;   ///< k, in units of D0 as for relaxation (>= 0; 0 turns it off)
   int tensile_n = 4;        ///< n, an integer in 1..8
   float tensile_dq = 0.2f;  ///< dq as a fraction of the kernel radius, in (0, 1)
+  /// Velocity damping c (1/s, >= 0): v *= exp(-c dt) every substep; 0 = off (no pass).
+  float damping = 0.0f;
 };
 
 /// "domain": the box that holds every particle. Particles are projected back inside it.
@@ -77,15 +79,58 @@ struct DistanceConstraintDef {
   float compliance = 0.0f;  ///< m/N (inverse stiffness, >= 0); 0 = infinitely stiff
 };
 
-/// One entry of "colliders": exactly one of "plane", "box", "sphere", plus a friction value.
+/// "sheet" of a cloth: a regular grid of resolution[0] x resolution[1] vertices spanning
+/// `size` from `origin` in the plane `plane` (its first axis takes size[0] and resolution[0]),
+/// each grid cell split into two triangles along alternating diagonals. Vertex (i, j) has index
+/// j * resolution[0] + i and UV (i / (resolution[0] - 1), j / (resolution[1] - 1)).
+struct SheetDef {
+  Vec3 origin{0.0f, 0.0f, 0.0f};          ///< m, required
+  std::array<float, 2> size{1.0f, 1.0f};  ///< m, > 0
+  std::array<int, 2> resolution{32, 32};  ///< vertices per side, 2..4096
+  std::string plane = "xz";  ///< two distinct axes of x, y, z: "xz" is horizontal, "xy" upright
+};
+
+/// "mesh" of a cloth: a triangle mesh read from an OBJ file (polygons are fanned into
+/// triangles), placed by x_world = x_file * scale + translate.
+struct ClothMeshDef {
+  std::string file;                  ///< required; relative paths are relative to the scene file
+  Vec3 translate{0.0f, 0.0f, 0.0f};  ///< m
+  float scale = 1.0f;                ///< > 0
+};
+
+/// One entry of "cloths": exactly one of "sheet" and "mesh", plus the material.
+struct ClothDef {
+  std::string name;  ///< output file stem <name>.%04d.obj; absent: "cloth<index>"
+  std::optional<SheetDef> sheet;
+  std::optional<ClothMeshDef> mesh;
+  float mass_per_area = 0.2f;       ///< kg/m^2 (> 0); a vertex gets a third of its triangles' mass
+  float thickness = 0.005f;         ///< m (> 0): contact distance of self and cloth-cloth contacts
+  float stretch_compliance = 0.0f;  ///< m/N (>= 0), XPBD compliance of every edge; 0 = inextensible
+  /// 1/(N m) (> 0): the inverse of the bending stiffness B; 1e4 (B = 1e-4 N m) bends like cotton.
+  float bend_compliance = 1e4f;
+  std::string bending = "dihedral"; ///< "dihedral" or "isometric"
+  bool tethers = false;             ///< long-range attachments to the pinned vertices
+  bool self_collision = false;      ///< particle contacts between non-adjacent vertices
+  float friction = 0.3f;            ///< Coulomb friction of the cloth's contacts (>= 0)
+  std::vector<int> pins;            ///< vertex indices pinned (mass 0)
+  std::optional<BoxDef> pin_box;    ///< vertices inside this box (rest positions) are pinned too
+  Vec3 velocity{0.0f, 0.0f, 0.0f};  ///< m/s, initial velocity of every vertex
+};
+
+/// One entry of "colliders": exactly one of "plane", "box", "sphere", "capsule", "mesh", plus a
+/// friction value.
 struct ColliderDef {
-  enum class Shape { Plane, Box, Sphere };
+  enum class Shape { Plane, Box, Sphere, Capsule, Mesh };
   Shape shape = Shape::Plane;
   Vec3 point{0.0f, 0.0f, 0.0f};   ///< plane: a point on it (m)
   Vec3 normal{0.0f, 1.0f, 0.0f};  ///< plane: points into the free side (normalized on load)
   BoxDef box;                     ///< box: solid axis-aligned box (m)
   Vec3 center{0.0f, 0.0f, 0.0f};  ///< sphere: center (m)
-  float radius = 0.0f;            ///< sphere: radius (m, > 0, required)
+  float radius = 0.0f;            ///< sphere, capsule: radius (m, > 0, required)
+  Vec3 end_a{0.0f, 0.0f, 0.0f};   ///< capsule: one end of its axis (m)
+  Vec3 end_b{0.0f, 0.0f, 0.0f};   ///< capsule: the other end (m)
+  ClothMeshDef mesh;              ///< mesh: a closed OBJ triangle mesh, placed like a cloth's
+  float voxel_size = 0.0f;        ///< mesh: SDF sample spacing (m); 0 = 1/64 of its largest side
   float friction = 0.0f;          ///< Coulomb friction coefficient (>= 0)
 };
 
@@ -119,6 +164,9 @@ struct SceneDef {
   std::vector<ParticleDef> particles;
   std::vector<DistanceConstraintDef> distance_constraints;
   std::vector<ColliderDef> colliders;
+  std::vector<ClothDef> cloths;
+  /// The scene file's folder: relative OBJ paths are resolved against it ("" for scene text).
+  std::string base_dir;
 };
 
 }  // namespace seiche

@@ -30,8 +30,11 @@ class SceneError : public std::runtime_error {
 /// "<default scene>"). `overrides` are "KEY=VALUE" with KEY a dotted JSON path
 /// ("solver.iterations", "fluids.0.spacing" or "fluids[0].spacing") and VALUE JSON
 /// ("8", "[0,-9.81,0]", "true") or, if it does not parse as JSON, a plain string.
+/// `base_dir`: the folder relative mesh paths ("cloths[k].mesh.file") are resolved against
+/// (empty: the working directory).
 SceneDef load_scene_text(std::string_view json_text, std::string_view source,
-                         std::span<const std::string> overrides = {});
+                         std::span<const std::string> overrides = {},
+                         const std::filesystem::path& base_dir = {});
 
 /// Reads a file and calls load_scene_text; the scene's name defaults to the file's stem.
 SceneDef load_scene_file(const std::filesystem::path& file,

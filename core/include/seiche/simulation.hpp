@@ -4,6 +4,7 @@
 // One substep (XPBD, "small steps"):
 //   predict          v += dt g, p = x + dt v
 //   neighbors        cell keys -> counting sort -> reorder the store -> neighbor lists
+//   contact pairs    candidate particle pairs of cloth contacts (particle_contact_stage.hpp)
 //   iterations x     every constraint pass (fluid density, distance, collisions, ...)
 //   update           v = (p - x) / dt, x = p
 //   velocity passes  vorticity confinement, XSPH viscosity
@@ -26,6 +27,9 @@ namespace seiche {
 
 class FluidSolver;
 class DistanceSolver;
+class ClothSolver;
+class ParticleContactStage;
+struct MeshSdf;
 struct Neighborhood;
 namespace kernels {
 struct ParticleView;
@@ -55,6 +59,9 @@ class Simulation {
   const PassTimer& timer() const { return timer_; }
   int frame() const { return frame_; }
   double time() const { return time_; }
+
+  /// The cloths of the scene (meshes, vertex ids, constraint counts), or null when it has none.
+  const ClothSolver* cloth() const { return cloth_.get(); }
 
   /// Names of the passes this scene's pipeline runs, in order.
   std::vector<std::string> pipeline() const;
@@ -91,6 +98,9 @@ class Simulation {
   std::unique_ptr<Neighborhood> neighborhood_;  // null when no pass needs neighbors
   std::unique_ptr<FluidSolver> fluid_;
   std::unique_ptr<DistanceSolver> distance_;
+  std::unique_ptr<ClothSolver> cloth_;
+  std::unique_ptr<ParticleContactStage> contacts_;    // null unless particles of cloth can touch
+  std::vector<std::unique_ptr<MeshSdf>> mesh_sdfs_;   // the fields of the mesh colliders
   std::unique_ptr<kernels::CollisionParams> collision_params_;
   std::vector<kernels::CollisionShape> colliders_;
   std::vector<Pass> begin_substep_passes_;  // reset per-substep state (XPBD lambdas)

@@ -4,7 +4,9 @@
 // the substep's displacement dx_t = (p - x) - ((p - x).n) n:
 //   |dx_t| <= mu d:  p -= dx_t                          (static: sticks)
 //   otherwise:       p -= dx_t * mu d / |dx_t|          (kinetic: slides, slowed)
-// Shapes: the domain box (particles stay inside), half-spaces (plane), solid boxes, spheres.
+// Shapes: the domain box (particles stay inside), half-spaces (plane), solid boxes, spheres,
+// capsules (segment a-b grown by a radius) and signed distance fields (triangle meshes).
+// A particle's radius depends on its material: fluid_radius, cloth_radius[group], else 0.
 // Pinned particles (w = 0) are not moved.
 #pragma once
 
@@ -12,23 +14,26 @@
 #include <span>
 
 #include "seiche/kernels/particle_view.hpp"
+#include "seiche/kernels/sdf_grid.hpp"
 
 namespace seiche::kernels {
 
 struct CollisionShape {
-  enum class Kind { Plane, Box, Sphere };
+  enum class Kind { Plane, Box, Sphere, Capsule, Sdf };
   Kind kind = Kind::Plane;
-  float a[3] = {0, 0, 0};  ///< plane: point; box: min; sphere: center
-  float b[3] = {0, 1, 0};  ///< plane: unit normal; box: max
-  float radius = 0.0f;     ///< sphere
+  float a[3] = {0, 0, 0};  ///< plane: point; box: min; sphere: center; capsule: one end
+  float b[3] = {0, 1, 0};  ///< plane: unit normal; box: max; capsule: the other end
+  float radius = 0.0f;     ///< sphere, capsule
   float friction = 0.0f;
+  const SdfGrid* sdf = nullptr;  ///< sdf: the field (owned by the caller)
 };
 
 struct CollisionParams {
   float domain_min[3] = {0, 0, 0};
   float domain_max[3] = {1, 1, 1};
   float domain_friction = 0.0f;
-  float fluid_radius = 0.0f;  ///< collision radius of fluid particles; other particles: 0
+  float fluid_radius = 0.0f;  ///< collision radius of fluid particles
+  const float* cloth_radius = nullptr;  ///< per cloth (phase group): half its thickness
 };
 
 void solve_collisions(const ParticleView& p, const CollisionParams& params,

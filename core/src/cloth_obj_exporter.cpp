@@ -1,0 +1,63 @@
+#include "seiche/cloth_obj_exporter.hpp"
+
+#include "cloth_solver.hpp"
+#include "seiche/output_files.hpp"
+
+namespace seiche {
+
+namespace {
+
+// The cloths' vertices are the last particles of the store, cloth after cloth in vertex order
+// (Simulation::create_particles); their ids follow from the store's size.
+class ClothObjExporter final : public FrameExporter {
+ public:
+  explicit ClothObjExporter(const SceneDef& scene) {
+    for (std::size_t c = 0; c < scene.cloths.size(); ++c) {
+      names_.push_back(scene.cloths[c].name);
+      shapes_.push_back(build_cloth_shape(scene.cloths[c], c, scene.name));
+      vertices_ += shapes_.back().mesh.vertex_count();
+    }
+  }
+
+  std::string name() const override { return "cloth obj"; }
+
+  std::vector<std::filesystem::path> files(int frame) const override {
+    std::vector<std::filesystem::path> f;
+    for (const std::string& n : names_) f.emplace_back(frame_file_name(n, frame, "obj"));
+    return f;
+  }
+
+  std::uint64_t write_frame(const FrameView& frame, const std::filesystem::path& dir) override {
+    const ParticleStore& s = frame.particles;
+    const std::vector<std::uint32_t> index_of_id = s.index_of_id();
+    std::size_t id = s.size() - vertices_;
+    std::uint64_t bytes = 0;
+    std::vector<Vec3> positions;
+    for (std::size_t c = 0; c < shapes_.size(); ++c) {
+      const std::size_t n = shapes_[c].mesh.vertex_count();
+      positions.resize(n);
+      for (std::size_t v = 0; v < n; ++v, ++id) {
+        const std::uint32_t k = index_of_id[id];
+        positions[v] = {s.x[k], s.y[k], s.z[k]};
+      }
+      const std::string text = encode_cloth_obj(shapes_[c].mesh, positions);
+      write_file_atomically(dir / frame_file_name(names_[c], frame.frame, "obj"), text);
+      bytes += text.size();
+    }
+    return bytes;
+  }
+
+ private:
+  std::vector<std::string> names_;
+  std::vector<ClothShape> shapes_;
+  std::size_t vertices_ = 0;
+};
+
+}  // namespace
+
+std::unique_ptr<FrameExporter> make_cloth_obj_exporter(const SceneDef& scene) {
+  if (scene.cloths.empty()) return nullptr;
+  return std::make_unique<ClothObjExporter>(scene);
+}
+
+}  // namespace seiche

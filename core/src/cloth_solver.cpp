@@ -1,0 +1,227 @@
+#include "cloth_solver.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <queue>
+
+#include <fmt/format.h>
+
+#include "seiche/kernels/dihedral_bending.hpp"
+#include "seiche/kernels/phase.hpp"
+
+namespace seiche {
+
+namespace {
+
+constexpr std::size_t kTethersPerVertex = 4;  // the nearest pinned vertices a vertex is tied to
+
+double distance(const Vec3& a, const Vec3& b) {
+  const double dx = double(a[0]) - b[0], dy = double(a[1]) - b[1], dz = double(a[2]) - b[2];
+  return std::sqrt(dx * dx + dy * dy + dz * dz);
+}
+
+bool inside(const Vec3& p, const BoxDef& b) {
+  for (int a = 0; a < 3; ++a)
+    if (p[a] < b.min[a] || p[a] > b.max[a]) return false;
+  return true;
+}
+
+// Shortest path lengths along the mesh edges from `source` to every vertex (Dijkstra): a
+// geodesic distance that is never shorter than the true one, so a tether is never too tight.
+std::vector<double> edge_path_distances(const ClothShape& shape, std::uint32_t source,
+                                        const std::vector<std::vector<std::uint32_t>>& neighbors) {
+  const auto& x = shape.mesh.positions;
+  std::vector<double> d(x.size(), std::numeric_limits<double>::infinity());
+  using Item = std::pair<double, std::uint32_t>;
+  std::priority_queue<Item, std::vector<Item>, std::greater<>> queue;
+  d[source] = 0.0;
+  queue.push({0.0, source});
+  while (!queue.empty()) {
+    const auto [du, u] = queue.top();
+    queue.pop();
+    if (du > d[u]) continue;
+    for (std::uint32_t v : neighbors[u]) {
+      const double dv = du + distance(x[u], x[v]);
+      if (dv < d[v]) d[v] = dv, queue.push({dv, v});
+    }
+  }
+  return d;
+}
+
+}  // namespace
+
+ClothShape build_cloth_shape(const ClothDef& cloth, std::size_t index, const std::string& file) {
+  const std::string path = fmt::format("cloths[{}]", index);
+  ClothShape s;
+  if (cloth.mesh) {
+    s.mesh = read_obj_mesh(cloth.mesh->file, *cloth.mesh, path + ".mesh");
+    s.topology = build_topology(s.mesh, cloth.mesh->file, path + ".mesh.file");
+  } else {
+    s.mesh = make_sheet(*cloth.sheet, file, path + ".sheet");
+    s.topology = build_topology(s.mesh, file, path + ".sheet");
+  }
+  return s;
+}
+
+ClothSolver::ClothSolver(const SceneDef& scene) : scene_cloths_(scene.cloths) {
+  for (std::size_t c = 0; c < scene_cloths_.size(); ++c) {
+    shapes_.push_back(build_cloth_shape(scene_cloths_[c], c, scene.name));
+    total_vertices_ += shapes_.back().mesh.vertex_count();
+    radius_.push_back(0.5f * scene_cloths_[c].thickness);
+  }
+}
+
+ClothSolver::~ClothSolver() = default;
+
+void ClothSolver::create(ParticleStore& store, std::size_t first, const kernels::ParticleView& view) {
+  std::vector<std::uint32_t> edge_i, edge_j, hinge_dihedral, hinge_isometric;
+  std::vector<float> edge_rest, edge_compliance, bend_dihedral, bend_isometric;
+  std::size_t base = first;
+  for (std::size_t c = 0; c < shapes_.size(); ++c) {
+    const ClothDef& def = scene_cloths_[c];
+    const ClothMesh& mesh = shapes_[c].mesh;
+    const ClothTopology& topo = shapes_[c].topology;
+    const std::size_t n = mesh.vertex_count();
+    first_id_.push_back(std::int32_t(base));
+
+    // Pins: listed indices and the vertices inside pin_box.
+    std::vector<std::uint8_t> pinned(n, 0);
+    for (int p : def.pins) pinned[std::size_t(p)] = 1;
+    if (def.pin_box)
+      for (std::size_t v = 0; v < n; ++v) pinned[v] |= inside(mesh.positions[v], *def.pin_box) ? 1 : 0;
+
+    // Mass: mass_per_area times the area a vertex owns; a vertex in no triangle gets the mean.
+    double area_sum = 0.0;
+    std::size_t with_area = 0;
+    for (double a : topo.vertex_area)
+      if (a > 0.0) area_sum += a, ++with_area;
+    const double mean_area = with_area ? area_sum / double(with_area) : 1.0;
+    for (std::size_t v = 0; v < n; ++v) {
+      const std::size_t k = base + v;
+      const Vec3& x = mesh.positions[v];
+      store.x[k] = x[0], store.y[k] = x[1], store.z[k] = x[2];
+      store.vx[k] = def.velocity[0], store.vy[k] = def.velocity[1], store.vz[k] = def.velocity[2];
+      const double area = topo.vertex_area[v] > 0.0 ? topo.vertex_area[v] : mean_area;
+      store.w[k] = pinned[v] ? 0.0f : float(1.0 / (def.mass_per_area * area));
+      store.phase[k] = make_phase(Material::Cloth, std::uint32_t(c));
+    }
+
+    for (const auto& e : topo.edges) {
+      edge_i.push_back(std::uint32_t(base + e[0]));
+      edge_j.push_back(std::uint32_t(base + e[1]));
+      edge_rest.push_back(float(distance(mesh.positions[e[0]], mesh.positions[e[1]])));
+      edge_compliance.push_back(def.stretch_compliance);
+    }
+    const bool isometric = def.bending == "isometric";
+    auto& hinge_list = isometric ? hinge_isometric : hinge_dihedral;
+    auto& compliance_list = isometric ? bend_isometric : bend_dihedral;
+    for (const auto& h : topo.hinges) {
+      for (std::uint32_t v : h) hinge_list.push_back(std::uint32_t(base + v));
+      compliance_list.push_back(def.bend_compliance);
+    }
+    if (def.tethers) build_tethers(c, base, pinned);
+    base += n;
+  }
+  kernels::color_distance_constraints(edge_i, edge_j, edge_rest, edge_compliance, view.n, stretch_);
+  if (!bend_dihedral.empty()) kernels::build_dihedral_bending(hinge_dihedral, bend_dihedral, view, dihedral_);
+  if (!bend_isometric.empty())
+    kernels::build_isometric_bending(hinge_isometric, bend_isometric, view, isometric_);
+}
+
+// Each free vertex is tied to its kTethersPerVertex nearest pinned vertices of the same cloth, at
+// their rest distance: straight-line for a generated (flat) sheet, along the edges for a mesh.
+void ClothSolver::build_tethers(std::size_t c, std::size_t base, std::span<const std::uint8_t> pinned) {
+  const ClothShape& shape = shapes_[c];
+  const auto& x = shape.mesh.positions;
+  const std::size_t n = x.size();
+  std::vector<std::uint32_t> pins;
+  for (std::size_t v = 0; v < n; ++v)
+    if (pinned[v]) pins.push_back(std::uint32_t(v));
+  if (pins.empty()) return;
+
+  // rest[p][v]: rest distance from pin p to vertex v.
+  std::vector<std::vector<double>> rest(pins.size());
+  if (scene_cloths_[c].sheet) {
+    for (std::size_t p = 0; p < pins.size(); ++p) {
+      rest[p].resize(n);
+      for (std::size_t v = 0; v < n; ++v) rest[p][v] = distance(x[pins[p]], x[v]);
+    }
+  } else {
+    std::vector<std::vector<std::uint32_t>> neighbors(n);
+    for (const auto& e : shape.topology.edges) neighbors[e[0]].push_back(e[1]), neighbors[e[1]].push_back(e[0]);
+    for (std::size_t p = 0; p < pins.size(); ++p) rest[p] = edge_path_distances(shape, pins[p], neighbors);
+  }
+
+  if (tethers_.start.empty()) tethers_.start.push_back(0);
+  std::vector<std::uint32_t> nearest(pins.size());
+  for (std::size_t v = 0; v < n; ++v) {
+    if (pinned[v]) continue;
+    std::iota(nearest.begin(), nearest.end(), 0u);
+    const std::size_t keep = std::min(kTethersPerVertex, pins.size());
+    std::partial_sort(nearest.begin(), nearest.begin() + std::ptrdiff_t(keep), nearest.end(),
+                      [&](std::uint32_t a, std::uint32_t b) {
+                        return rest[a][v] != rest[b][v] ? rest[a][v] < rest[b][v] : a < b;
+                      });
+    std::size_t added = 0;
+    for (std::size_t k = 0; k < keep; ++k) {
+      const double length = rest[nearest[k]][v];
+      if (!std::isfinite(length)) continue;  // in another connected piece of the mesh
+      tethers_.anchor.push_back(std::uint32_t(base + pins[nearest[k]]));
+      tethers_.max_length.push_back(float(length));
+      ++added;
+    }
+    if (added == 0) continue;
+    tethers_.particle.push_back(std::uint32_t(base + v));
+    tethers_.start.push_back(std::uint32_t(tethers_.anchor.size()));
+  }
+}
+
+bool ClothSolver::adjacent(std::size_t c, std::uint32_t u, std::uint32_t v) const {
+  if (u == v) return true;
+  const ClothTopology& t = shapes_[c].topology;
+  const auto begin = t.adjacent.begin() + t.adjacent_start[u];
+  const auto end = t.adjacent.begin() + t.adjacent_start[u + 1];
+  return std::binary_search(begin, end, v);
+}
+
+void ClothSolver::begin_substep() {
+  std::fill(stretch_.lambda.begin(), stretch_.lambda.end(), 0.0f);
+  std::fill(dihedral_.lambda.begin(), dihedral_.lambda.end(), 0.0f);
+  std::fill(isometric_.hinges.lambda.begin(), isometric_.hinges.lambda.end(), 0.0f);
+}
+
+void ClothSolver::solve_stretch(const kernels::ParticleView& p, float dt) {
+  kernels::solve_distance_constraints(p, stretch_, dt);
+}
+
+void ClothSolver::solve_bending(const kernels::ParticleView& p, float dt) {
+  if (dihedral_.size()) kernels::solve_dihedral_bending(p, dihedral_, dt);
+  if (isometric_.size()) kernels::solve_isometric_bending(p, isometric_, dt);
+}
+
+void ClothSolver::solve_tethers(const kernels::ParticleView& p) { kernels::solve_tethers(p, tethers_); }
+
+void ClothSolver::remap(std::span<const std::uint32_t> new_index) {
+  for (auto& k : stretch_.i) k = new_index[k];
+  for (auto& k : stretch_.j) k = new_index[k];
+  dihedral_.remap(new_index);
+  isometric_.hinges.remap(new_index);
+  tethers_.remap(new_index);
+}
+
+ClothError ClothSolver::measure(const kernels::ParticleView& p) const {
+  ClothError e;
+  const auto strain = kernels::distance_constraint_error(p, stretch_);
+  e.strain_mean = strain.mean;
+  e.strain_max = strain.max;
+  const auto d = kernels::bending_error(p, dihedral_);
+  const auto i = kernels::bending_error(p, isometric_.hinges);
+  const double nd = double(dihedral_.size()), ni = double(isometric_.size());
+  if (nd + ni > 0) e.bending_mean = (d.mean * nd + i.mean * ni) / (nd + ni);
+  e.bending_max = std::max(d.max, i.max);
+  return e;
+}
+
+}  // namespace seiche

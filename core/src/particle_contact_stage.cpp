@@ -1,0 +1,186 @@
+#include "particle_contact_stage.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <tbb/parallel_for.h>
+
+#include "seiche/kernels/phase.hpp"
+
+namespace seiche {
+
+bool ParticleContactStage::needed(const SceneDef& scene) {
+  if (scene.cloths.empty()) return false;
+  if (scene.cloths.size() > 1 || !scene.fluids.empty()) return true;
+  return scene.cloths[0].self_collision;
+}
+
+ParticleContactStage::ParticleContactStage(const ClothSolver& cloth, const DomainDef& domain,
+                                           float fluid_radius)
+    : cloth_(cloth), fluid_radius_(fluid_radius) {
+  for (std::size_t c = 0; c < cloth.cloth_count(); ++c) {
+    max_cloth_distance_ = std::max(max_cloth_distance_, cloth.thickness(c));
+    friction_ = std::max(friction_, cloth.friction(c));
+  }
+  for (int a = 0; a < 3; ++a) domain_min_[a] = domain.min[a], domain_max_[a] = domain.max[a];
+}
+
+// Calls visit(j, contact_distance) for every candidate partner of cloth particle i, cloth
+// partners first (in grid order), then fluid partners (in the fluid grid's order).
+template <class Visit>
+void ParticleContactStage::visit_candidates(const ParticleStore& store, const Neighborhood* fluid,
+                                            std::uint32_t i, Visit&& visit) const {
+  const float xi = store.px[i], yi = store.py[i], zi = store.pz[i];
+  if (!std::isfinite(xi) || !std::isfinite(yi) || !std::isfinite(zi)) return;
+  const std::uint32_t ci = store.phase[i] >> 8;
+  const std::uint32_t vi = std::uint32_t(store.id[i] - cloth_.first_id(ci));
+  const float ti = cloth_.thickness(ci);
+
+  auto visit_cloth = [&](std::uint32_t k) {
+    const std::uint32_t j = grid_.order()[k];
+    if (j == i) return;
+    const std::uint32_t cj = store.phase[j] >> 8;
+    const bool same_cloth = cj == ci;
+    if (same_cloth && !cloth_.self_collision(ci)) return;
+    const float r = same_cloth ? ti : 0.5f * (ti + cloth_.thickness(cj));
+    const kernels::Float4& q = sorted_[k];
+    const float dx = xi - q.x, dy = yi - q.y, dz = zi - q.z;
+    const float reach = kCandidateMargin * r;
+    if (!(dx * dx + dy * dy + dz * dz < reach * reach)) return;
+    if (same_cloth && cloth_.adjacent(ci, vi, std::uint32_t(store.id[j] - cloth_.first_id(cj)))) return;
+    visit(j, r);
+  };
+
+  // Cloth partners: the cloth grid's cells are at least twice the largest candidate distance, so
+  // the 2 x 2 x 2 cells nearest to p_i hold every particle within it (a cell per axis on each
+  // side of the cell boundary closest to p_i).
+  {
+    const neighbor::GridSpec& s = grid_.spec();
+    const float p[3] = {xi, yi, zi};
+    std::int32_t lo[3], hi[3];
+    for (int a = 0; a < 3; ++a) {
+      const float u = (p[a] - s.origin[a]) / s.cell_size - 0.5f;
+      const float first = std::clamp(std::floor(u), 0.0f, float(std::max(s.dims[a] - 2, 0)));
+      lo[a] = std::int32_t(first);
+      hi[a] = std::min(lo[a] + 1, s.dims[a] - 1);
+    }
+    for (std::int32_t z = lo[2]; z <= hi[2]; ++z)
+      for (std::int32_t y = lo[1]; y <= hi[1]; ++y)
+        for (std::int32_t x = lo[0]; x <= hi[0]; ++x) {
+          const std::uint32_t cell = grid_.cell_index(x, y, z);
+          for (std::uint32_t k = grid_.cell_begin(cell); k < grid_.cell_end(cell); ++k) visit_cloth(k);
+        }
+  }
+  if (!fluid || fluid->count() == 0) return;
+
+  // Fluid partners: the cells of the fluid grid within `cells` cells of p_i's cell.
+  const float r = 0.5f * ti + fluid_radius_;
+  const float reach = kCandidateMargin * r;
+  const neighbor::CellGrid& grid = fluid->grid;
+  const int cells = int(std::ceil(reach / grid.spec().cell_size));
+  std::int32_t c[3];
+  grid.cell_of(xi, yi, zi, c);
+  const auto& d = grid.spec().dims;
+  for (int z = std::max(c[2] - cells, 0); z <= std::min(c[2] + cells, d[2] - 1); ++z)
+    for (int y = std::max(c[1] - cells, 0); y <= std::min(c[1] + cells, d[1] - 1); ++y)
+      for (int x = std::max(c[0] - cells, 0); x <= std::min(c[0] + cells, d[0] - 1); ++x) {
+        const std::uint32_t cell = grid.cell_index(x, y, z);
+        for (std::uint32_t j = grid.cell_begin(cell); j < grid.cell_end(cell); ++j) {
+          const float dx = xi - store.px[j], dy = yi - store.py[j], dz = zi - store.pz[j];
+          if (dx * dx + dy * dy + dz * dz < reach * reach) visit(j, r);
+        }
+      }
+}
+
+void ParticleContactStage::find_candidates(const ParticleStore& store, const Neighborhood* fluid) {
+  const std::size_t n = store.size();
+  // The cloth grid: cloth particles only, sorted by cell into sorted_ (the store stays as it is).
+  in_grid_.resize(n);
+  cloth_particles_.clear();
+  for (std::size_t i = 0; i < n; ++i) {
+    const bool is_cloth = phase_material(store.phase[i]) == Material::Cloth;
+    in_grid_[i] = is_cloth ? 1 : 0;
+    if (is_cloth) cloth_particles_.push_back(std::uint32_t(i));
+  }
+  // The grid spans the cloths' box (clamped to the domain grown by a cell: particles outside
+  // share the border cells), with cells of twice the largest candidate distance (a query scans
+  // 2 x 2 x 2 cells). A draped sheet fills its box sparsely, so the grid gets up to 32 cells per
+  // particle before its cells grow.
+  const float cell = 2.0f * kCandidateMargin * max_cloth_distance_;
+  float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  for (std::uint32_t i : cloth_particles_) {
+    const float p[3] = {store.px[i], store.py[i], store.pz[i]};
+    for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], p[a]), hi[a] = std::max(hi[a], p[a]);
+  }
+  for (int a = 0; a < 3; ++a) {  // (NaN coordinates fail every comparison and leave lo/hi alone)
+    lo[a] = std::max(lo[a], domain_min_[a]) - cell;
+    hi[a] = std::min(hi[a], domain_max_[a]) + cell;
+    if (!(lo[a] <= hi[a])) lo[a] = domain_min_[a], hi[a] = domain_max_[a];
+  }
+  const neighbor::GridSpec spec =
+      neighbor::make_grid_spec(lo, hi, cell, std::max<std::size_t>(32 * cloth_particles_.size(), 1 << 16));
+  grid_.build(spec, store.px.data(), store.py.data(), store.pz.data(), in_grid_.data(), n);
+  const std::size_t in_grid = grid_.num_in_grid();
+  sorted_.resize(in_grid);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, in_grid, 4096), [&](const auto& r) {
+    for (std::size_t k = r.begin(); k != r.end(); ++k) {
+      const std::uint32_t j = grid_.order()[k];
+      sorted_[k] = {store.px[j], store.py[j], store.pz[j], 0.0f};
+    }
+  });
+
+  // Cloth particles' lists, each in a fixed order, kMaxCandidates slots per particle.
+  const std::size_t m = cloth_particles_.size();
+  std::vector<std::uint32_t>& count = count_;
+  count.assign(m, 0);
+  slot_partner_.resize(m * kMaxCandidates);
+  slot_distance_.resize(m * kMaxCandidates);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m, 256), [&](const auto& r) {
+    for (std::size_t g = r.begin(); g != r.end(); ++g) {
+      std::uint32_t* partner = slot_partner_.data() + g * kMaxCandidates;
+      float* distance = slot_distance_.data() + g * kMaxCandidates;
+      std::uint32_t& n_g = count[g];
+      visit_candidates(store, fluid, cloth_particles_[g], [&](std::uint32_t j, float d) {
+        if (n_g < kMaxCandidates) partner[n_g] = j, distance[n_g] = d, ++n_g;
+      });
+    }
+  });
+
+  // The contact list: cloth particles with candidates, then the fluid particles they touch,
+  // each fluid particle's cloth partners in cloth order (a transpose of the cloth lists).
+  contacts_.clear();
+  struct FluidPair {
+    std::uint32_t fluid, cloth;
+    float distance;
+  };
+  std::vector<FluidPair> fluid_pairs;
+  for (std::size_t g = 0; g < m; ++g) {
+    if (count[g] == 0) continue;
+    const std::uint32_t i = cloth_particles_[g];
+    contacts_.particle.push_back(i);
+    for (std::size_t e = g * kMaxCandidates; e < g * kMaxCandidates + count[g]; ++e) {
+      const std::uint32_t j = slot_partner_[e];
+      contacts_.partner.push_back(j);
+      contacts_.distance.push_back(slot_distance_[e]);
+      if (phase_material(store.phase[j]) == Material::Fluid) fluid_pairs.push_back({j, i, slot_distance_[e]});
+    }
+    contacts_.start.push_back(std::uint32_t(contacts_.partner.size()));
+  }
+  std::stable_sort(fluid_pairs.begin(), fluid_pairs.end(),
+                   [](const FluidPair& a, const FluidPair& b) { return a.fluid < b.fluid; });
+  for (std::size_t e = 0; e < fluid_pairs.size(); ++e) {
+    if (e == 0 || fluid_pairs[e].fluid != fluid_pairs[e - 1].fluid) {
+      if (e > 0) contacts_.start.push_back(std::uint32_t(contacts_.partner.size()));
+      contacts_.particle.push_back(fluid_pairs[e].fluid);
+    }
+    contacts_.partner.push_back(fluid_pairs[e].cloth);
+    contacts_.distance.push_back(fluid_pairs[e].distance);
+  }
+  if (!fluid_pairs.empty()) contacts_.start.push_back(std::uint32_t(contacts_.partner.size()));
+}
+
+void ParticleContactStage::solve(const kernels::ParticleView& p) {
+  kernels::solve_particle_contacts(p, contacts_, friction_, scratch_);
+}
+
+}  // namespace seiche

@@ -1,0 +1,35 @@
+// Particle-particle contacts (cloth self-collision, cloth-cloth and cloth-fluid; Macklin et al.
+// 2014, "Unified particle physics", sec. 5 and 6.1): two particles closer than their contact
+// distance r are pushed apart along n = (p_i - p_j) / |p_i - p_j|,
+//   dp_i = w_i / (w_i + w_j) (r - |p_i - p_j|) n,
+// then friction removes the relative tangential motion of the substep (as for shapes,
+// collisions.hpp; static when it is below mu times the depth, else scaled to mu times it).
+// Jacobi with averaging: every particle sums its own corrections from its partners (each pair
+// is listed from both sides), divides by the count of active contacts, and all corrections are
+// applied after all are computed. No atomics, no order dependence: bit-identical results with
+// any thread count. Coincident particles (|p_i - p_j| < 1e-9 m) have no normal and are skipped.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "seiche/kernels/particle_view.hpp"
+
+namespace seiche::kernels {
+
+/// Contact candidates in CSR form: particle[g] has partners [start[g], start[g + 1]).
+struct ParticleContacts {
+  std::vector<std::uint32_t> particle;  ///< store indices of the particles with candidates
+  std::vector<std::uint32_t> start;     ///< size particle.size() + 1
+  std::vector<std::uint32_t> partner;   ///< per entry: store index of the other particle
+  std::vector<float> distance;          ///< per entry: contact distance r (m)
+
+  std::size_t size() const { return particle.size(); }
+  void clear() { particle.clear(), start.assign(1, 0), partner.clear(), distance.clear(); }
+};
+
+/// One Jacobi iteration. `scratch` is resized to 3 * c.size() and holds the corrections.
+void solve_particle_contacts(const ParticleView& p, const ParticleContacts& c, float friction,
+                             std::vector<float>& scratch);
+
+}  // namespace seiche::kernels

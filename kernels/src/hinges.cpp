@@ -1,0 +1,111 @@
+// Hinges (hinges.hpp): the signed dihedral angle
+//   theta = atan2((n1 x n2) . e, n1 . n2),  n1 = (b - a) x (c - a),  n2 = (a - b) x (d - b),
+//   e = (b - a) / |b - a|,
+// the remapping of their indices when the store is reordered, and the bending error metric.
+#include "seiche/kernels/hinges.hpp"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "seiche/kernels/graph_coloring.hpp"
+
+namespace seiche::kernels {
+
+namespace {
+
+template <class T>
+T signed_angle(const T pa[3], const T pb[3], const T pc[3], const T pd[3]) {
+  const T e[3] = {pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]};
+  const T ac[3] = {pc[0] - pa[0], pc[1] - pa[1], pc[2] - pa[2]};
+  const T bd[3] = {pd[0] - pb[0], pd[1] - pb[1], pd[2] - pb[2]};
+  // n1 = e x ac; n2 = (a - b) x (d - b) = bd x e.
+  const T n1[3] = {e[1] * ac[2] - e[2] * ac[1], e[2] * ac[0] - e[0] * ac[2],
+                   e[0] * ac[1] - e[1] * ac[0]};
+  const T n2[3] = {bd[1] * e[2] - bd[2] * e[1], bd[2] * e[0] - bd[0] * e[2],
+                   bd[0] * e[1] - bd[1] * e[0]};
+  const T e2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
+  const T n1sq = n1[0] * n1[0] + n1[1] * n1[1] + n1[2] * n1[2];
+  const T n2sq = n2[0] * n2[0] + n2[1] * n2[1] + n2[2] * n2[2];
+  const T min_wing = T(kHingeMinWing) * e2 * e2;
+  if (!(e2 > T(kHingeMinEdge2)) || !(n1sq > min_wing) || !(n2sq > min_wing)) return T(0);
+  const T m[3] = {n1[1] * n2[2] - n1[2] * n2[1], n1[2] * n2[0] - n1[0] * n2[2],
+                  n1[0] * n2[1] - n1[1] * n2[0]};
+  const T sin_part = (m[0] * e[0] + m[1] * e[1] + m[2] * e[2]) / std::sqrt(e2);
+  const T cos_part = n1[0] * n2[0] + n1[1] * n2[1] + n1[2] * n2[2];
+  return std::atan2(sin_part, cos_part);
+}
+
+}  // namespace
+
+float dihedral_angle(const float pa[3], const float pb[3], const float pc[3], const float pd[3]) {
+  return signed_angle(pa, pb, pc, pd);
+}
+
+double dihedral_angle(const double pa[3], const double pb[3], const double pc[3],
+                      const double pd[3]) {
+  return signed_angle(pa, pb, pc, pd);
+}
+
+void Hinges::remap(std::span<const std::uint32_t> new_index) {
+  for (auto* v : {&a, &b, &c, &d})
+    for (std::uint32_t& k : *v) k = new_index[k];
+}
+
+std::vector<std::uint32_t> build_hinges(std::span<const std::uint32_t> hinge_vertices,
+                                        const ParticleView& rest, Hinges& out) {
+  Coloring coloring = color_constraints(hinge_vertices, 4, rest.n);
+  const std::size_t m = coloring.order.size();
+  out.a.resize(m), out.b.resize(m), out.c.resize(m), out.d.resize(m);
+  out.rest_angle.resize(m);
+  out.compliance.assign(m, 0.0f);
+  out.lambda.assign(m, 0.0f);
+  out.color_start = std::move(coloring.color_start);
+  for (std::size_t k = 0; k < m; ++k) {
+    const std::uint32_t* v = hinge_vertices.data() + 4 * std::size_t(coloring.order[k]);
+    out.a[k] = v[0], out.b[k] = v[1], out.c[k] = v[2], out.d[k] = v[3];
+    double q[4][3];
+    for (int s = 0; s < 4; ++s)
+      q[s][0] = rest.x[v[s]], q[s][1] = rest.y[v[s]], q[s][2] = rest.z[v[s]];
+    double theta = dihedral_angle(q[0], q[1], q[2], q[3]);
+    if (theta <= -std::numbers::pi) theta = std::numbers::pi;  // (-pi, pi]
+    out.rest_angle[k] = float(theta);
+  }
+  return std::move(coloring.order);
+}
+
+BendingError bending_error(const ParticleView& p, const Hinges& h) {
+  // Parallel over fixed blocks of hinges, each summed in order, the blocks combined in order:
+  // the same bits with any thread count.
+  BendingError out;
+  const std::size_t m = h.size();
+  if (m == 0) return out;
+  constexpr std::size_t kBlock = 4096;
+  const std::size_t blocks = (m + kBlock - 1) / kBlock;
+  std::vector<double> sum(blocks, 0.0), max(blocks, 0.0);
+  tbb::parallel_for(std::size_t(0), blocks, [&](std::size_t blk) {
+    const std::size_t end = std::min(m, (blk + 1) * kBlock);
+    double s = 0.0, mx = 0.0;
+    for (std::size_t k = blk * kBlock; k < end; ++k) {
+      auto at = [&](std::uint32_t i, double q[3]) { q[0] = p.x[i], q[1] = p.y[i], q[2] = p.z[i]; };
+      double pa[3], pb[3], pc[3], pd[3];
+      at(h.a[k], pa), at(h.b[k], pb), at(h.c[k], pc), at(h.d[k], pd);
+      double err = std::abs(dihedral_angle(pa, pb, pc, pd) - double(h.rest_angle[k]));
+      if (err > std::numbers::pi) err = 2.0 * std::numbers::pi - err;  // wrap into [0, pi]
+      s += err;
+      mx = std::max(mx, err);
+    }
+    sum[blk] = s, max[blk] = mx;
+  });
+  double total = 0.0;
+  for (std::size_t blk = 0; blk < blocks; ++blk) {
+    total += sum[blk];
+    out.max = std::max(out.max, max[blk]);
+  }
+  out.mean = total / double(m);
+  return out;
+}
+
+}  // namespace seiche::kernels
