@@ -8,6 +8,7 @@
 
 #include <fmt/format.h>
 
+#include "blocked_reduce.hpp"
 #include "seiche/kernels/dihedral_bending.hpp"
 #include "seiche/kernels/phase.hpp"
 
@@ -213,8 +214,28 @@ void ClothSolver::remap(std::span<const std::uint32_t> new_index) {
 
 ClothError ClothSolver::measure(const kernels::ParticleView& p) const {
   ClothError e;
-  const auto strain = kernels::distance_constraint_error(p, stretch_);
-  e.strain_mean = strain.mean;
+  // |l - l0| / l0 per edge (rest lengths of a valid mesh are > 0), in fixed blocks.
+  struct Strain {
+    double sum = 0.0, max = 0.0;
+  };
+  const std::size_t m = stretch_.size();
+  const Strain strain = blocked_reduce(
+      m, Strain{},
+      [&](std::size_t begin, std::size_t end) {
+        Strain s;
+        for (std::size_t k = begin; k < end; ++k) {
+          const std::uint32_t a = stretch_.i[k], b = stretch_.j[k];
+          const double dx = double(p.x[a]) - p.x[b], dy = double(p.y[a]) - p.y[b], dz = double(p.z[a]) - p.z[b];
+          const double rest = stretch_.rest_length[k];
+          const double c = std::abs(std::sqrt(dx * dx + dy * dy + dz * dz) - rest);
+          const double rel = rest > 0.0 ? c / rest : c;
+          s.sum += rel;
+          s.max = std::max(s.max, rel);
+        }
+        return s;
+      },
+      [](Strain& acc, const Strain& s) { acc.sum += s.sum, acc.max = std::max(acc.max, s.max); });
+  e.strain_mean = m ? strain.sum / double(m) : 0.0;
   e.strain_max = strain.max;
   const auto d = kernels::bending_error(p, dihedral_);
   const auto i = kernels::bending_error(p, isometric_.hinges);

@@ -23,8 +23,9 @@
 //    transposed copy so that every sweep reads memory in order. Distances are computed in single
 //    precision (about 1e-7 of the mesh's size). Cost: one distance per sample and sweep for each
 //    neighbouring triangle that differs from the sample's own, so it grows where many triangles
-//    are nearly equally far (deep inside a finely tessellated convex shape). Measured on 2 busy
-//    cores: 20480-triangle sphere 0.65 s at 64^3, 3 s at 128^3; 320 triangles 0.1 s at 64^3.
+//    are nearly equally far (deep inside a finely tessellated convex shape). Measured on 2 cores
+//    shared with other jobs: a 20480-triangle sphere takes 0.6 s at 64^3 and 1.5 to 3 s at
+//    128^3; 320 triangles 0.1 s at 64^3.
 // 4. Sign, by counting crossings along x (a scanline inside/outside test). For each grid row
 //    (y_j, z_k), the triangles that the row's line passes through are found with an exact 2D
 //    point-in-triangle test in the yz plane: vertex coordinates are snapped to a lattice of
