@@ -37,14 +37,6 @@ double mechanical_energy(const Simulation& sim) {
   return e;
 }
 
-bool all_finite(const Simulation& sim) {
-  const ParticleStore& s = sim.particles();
-  for (std::size_t i = 0; i < s.size(); ++i)
-    for (float v : {s.x[i], s.y[i], s.z[i], s.vx[i], s.vy[i], s.vz[i]})
-      if (!std::isfinite(v)) return false;
-  return true;
-}
-
 // A 1 m sheet of n x n vertices, horizontal at y = 1.8, pinned at the two corners of its first
 // row: it falls and hangs.
 std::string hanging_sheet(bool tethers, int n = 32) {
@@ -350,4 +342,18 @@ TEST(Cloth, BadInputNamesTheField) {
       EXPECT_NE(std::string(e.what()).find("bad.json"), std::string::npos) << e.what();
     }
   }
+}
+
+// ---- Shipped scenes ---------------------------------------------------------------------------
+
+TEST(Cloth, EveryShippedSceneLoadsAndStepsFinite) {
+  std::size_t scenes = 0;
+  for (const auto& e : fs::directory_iterator(SEICHE_SCENES_DIR)) {
+    if (e.path().extension() != ".json") continue;
+    SCOPED_TRACE(e.path().string());
+    Simulation sim(load_scene_file(e.path()));
+    for (int f = 0; f < 2; ++f) ASSERT_EQ(sim.step_frame().non_finite, 0u);
+    ++scenes;
+  }
+  EXPECT_GE(scenes, 7u);
 }

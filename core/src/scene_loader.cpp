@@ -542,13 +542,16 @@ void check_distance_constraints(const SceneDef& scene, const std::string& file) 
 // Every cloth's mesh is built here once, so that a broken OBJ or a pin past the last vertex is
 // reported before anything runs; mesh paths become absolute (a resumed bake may run elsewhere).
 void check_cloths(SceneDef& scene, const std::string& file) {
-  std::vector<std::string> names{"particles", scene.name};
+  // Taken output stems: the particle files, and the fluid's .vdb / .obj (named after the scene).
+  std::vector<std::string> names{"particles"};
+  if (!scene.fluids.empty()) names.push_back(scene.name);
   for (std::size_t k = 0; k < scene.cloths.size(); ++k) {
     ClothDef& c = scene.cloths[k];
     const std::string path = element_path("cloths", k);
     if (std::find(names.begin(), names.end(), c.name) != names.end())
       fail(file, path + ".name",
-           fmt::format("\"{}\" is taken (by the particle files, the scene's own output or another cloth); "
+           fmt::format("\"{}\" is taken (by the particle files, the fluid's files named after the scene, or another "
+                       "cloth); "
                        "output files are named after it",
                        c.name));
     names.push_back(c.name);
