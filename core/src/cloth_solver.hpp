@@ -70,10 +70,6 @@ class ClothSolver {
   /// Strain and bending error at positions x.
   ClothError measure(const kernels::ParticleView& p) const;
 
-  std::size_t stretch_constraints() const { return stretch_.size(); }
-  std::size_t bending_constraints() const { return dihedral_.size() + isometric_.size(); }
-  std::size_t tether_count() const { return tethers_.anchor.size(); }
-
  private:
   void build_tethers(std::size_t c, std::size_t first, std::span<const std::uint8_t> pinned);
 
@@ -86,8 +82,7 @@ class ClothSolver {
   kernels::DistanceConstraints stretch_;
   kernels::Hinges dihedral_;
   kernels::IsometricBending isometric_;
-  // Tethers are built per cloth, then merged.
-  kernels::Tethers tethers_;
+  kernels::Tethers tethers_;  // all cloths' tethers, appended cloth by cloth
 };
 
 }  // namespace seiche

@@ -42,8 +42,6 @@ class ParticleContactStage {
   void find_candidates(const ParticleStore& store, const Neighborhood* fluid);
   void solve(const kernels::ParticleView& p);
 
-  std::size_t candidate_pairs() const { return contacts_.partner.size() / 2; }
-
  private:
   template <class Visit>
   void visit_candidates(const ParticleStore& store, const Neighborhood* fluid, std::uint32_t i, Visit&& visit) const;

@@ -51,6 +51,17 @@ inline void collide_domain(Point& p, const Point& x, const CollisionParams& c, f
   }
 }
 
+// Out of the ball of radius `reach` around c, along the line from c (up where p is at c).
+inline void push_out_of_ball(Point& p, const Point& x, const float c[3], float reach, float mu) {
+  const float dx = p.x - c[0], dy = p.y - c[1], dz = p.z - c[2];
+  const float len = std::sqrt(dx * dx + dy * dy + dz * dz);
+  const float depth = reach - len;
+  if (depth <= 0.0f) return;
+  float n[3] = {0.0f, 1.0f, 0.0f};
+  if (len > 1e-12f) n[0] = dx / len, n[1] = dy / len, n[2] = dz / len;
+  resolve_contact(p, x, n, depth, mu);
+}
+
 inline void collide_shape(Point& p, const Point& x, const CollisionShape& s, float r) {
   switch (s.kind) {
     case CollisionShape::Kind::Plane: {
@@ -59,16 +70,9 @@ inline void collide_shape(Point& p, const Point& x, const CollisionShape& s, flo
       if (d < 0.0f) resolve_contact(p, x, s.b, -d, s.friction);
       break;
     }
-    case CollisionShape::Kind::Sphere: {
-      const float dx = p.x - s.a[0], dy = p.y - s.a[1], dz = p.z - s.a[2];
-      const float len = std::sqrt(dx * dx + dy * dy + dz * dz);
-      const float depth = s.radius + r - len;
-      if (depth <= 0.0f) break;
-      float n[3] = {0.0f, 1.0f, 0.0f};  // at the exact center: push up
-      if (len > 1e-12f) n[0] = dx / len, n[1] = dy / len, n[2] = dz / len;
-      resolve_contact(p, x, n, depth, s.friction);
+    case CollisionShape::Kind::Sphere:
+      push_out_of_ball(p, x, s.a, s.radius + r, s.friction);
       break;
-    }
     case CollisionShape::Kind::Capsule: {
       // Closest point on the segment a-b, then as a sphere around it (a zero-length segment is
       // a sphere around a).
@@ -79,14 +83,8 @@ inline void collide_shape(Point& p, const Point& x, const CollisionShape& s, flo
         t = ((p.x - s.a[0]) * ab[0] + (p.y - s.a[1]) * ab[1] + (p.z - s.a[2]) * ab[2]) / ab2;
         t = std::clamp(t, 0.0f, 1.0f);
       }
-      const float dx = p.x - (s.a[0] + t * ab[0]), dy = p.y - (s.a[1] + t * ab[1]),
-                  dz = p.z - (s.a[2] + t * ab[2]);
-      const float len = std::sqrt(dx * dx + dy * dy + dz * dz);
-      const float depth = s.radius + r - len;
-      if (depth <= 0.0f) break;
-      float n[3] = {0.0f, 1.0f, 0.0f};  // exactly on the axis: push up
-      if (len > 1e-12f) n[0] = dx / len, n[1] = dy / len, n[2] = dz / len;
-      resolve_contact(p, x, n, depth, s.friction);
+      const float closest[3] = {s.a[0] + t * ab[0], s.a[1] + t * ab[1], s.a[2] + t * ab[2]};
+      push_out_of_ball(p, x, closest, s.radius + r, s.friction);
       break;
     }
     case CollisionShape::Kind::Sdf: {
