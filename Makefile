@@ -2,6 +2,7 @@
 #   make run    install what is missing, build Release, bake the default scene
 #   make render render one baked frame with Blender (needs Debian's blender package)
 #   make test   install what is missing, build, run every test through ctest
+#   make bench  every microbenchmark, then the stability suite (seiche bench --stability)
 BUILD_DIR ?= build/release
 JOBS ?= $(shell nproc)
 SEICHE := $(BUILD_DIR)/apps/seiche
@@ -35,11 +36,14 @@ render:
 test: build
 	ctest --test-dir $(BUILD_DIR) --output-on-failure -j $(JOBS)
 
+# Every Google Benchmark target, medians of 5 repetitions; then the stability suite at full size.
+BENCHES := bench_neighbor bench_pbf bench_kernels bench_cloth_kernels bench_cloth bench_export
 bench: build
-	$(BUILD_DIR)/benchmarks/bench_neighbor --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
-	$(BUILD_DIR)/benchmarks/bench_pbf --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
-	@if [ -x $(BUILD_DIR)/benchmarks/bench_export ]; then \
-	  $(BUILD_DIR)/benchmarks/bench_export --benchmark_repetitions=5 --benchmark_report_aggregates_only=true; fi
+	@for b in $(BENCHES); do \
+	  if [ -x $(BUILD_DIR)/benchmarks/$$b ]; then \
+	    $(BUILD_DIR)/benchmarks/$$b --benchmark_repetitions=5 --benchmark_report_aggregates_only=true || exit 1; fi; \
+	done
+	$(SEICHE) bench --stability
 
 clean:
 	rm -rf build out

@@ -6,7 +6,7 @@
 //   BM_rebuild_and_query: static particles (the keys stay sorted: the grid's fast path).
 //   BM_rebuild_and_query_moving: particles move by up to 0.1 s per step, back and forth, so a few
 //     percent change cell every step (the grid's general path: atomic counting sort).
-// Args: cube side, TBB threads.
+// Args: cube side, TBB threads (1, 2, 4, ... and std::thread::hardware_concurrency()).
 //   BM_small_scenes: the sizes a simulation substep sees, where fixed overheads matter.
 //     scene 0: 6750 particles, a 15 x 30 x 15 lattice, s = 0.02, h = 0.04, in the box
 //              [0, 0.3] x [0, 1] x [0, 0.3] grown by h.
@@ -19,6 +19,7 @@
 #include <cstdint>
 #include <random>
 #include <span>
+#include <thread>
 #include <vector>
 
 #include <tbb/global_control.h>
@@ -153,15 +154,24 @@ void BM_grid_build_shuffled(benchmark::State& state) {
   }
 }
 
+// 1, 2, 4, ... threads and all of them.
+std::vector<int> thread_counts() {
+  const int all = int(std::max(1u, std::thread::hardware_concurrency()));
+  std::vector<int> counts;
+  for (int threads = 1; threads < all; threads *= 2) counts.push_back(threads);
+  counts.push_back(all);
+  return counts;
+}
+
 void sizes(benchmark::internal::Benchmark* b) {
   for (int side : {40, 64, 100})
-    for (int threads : {1, 2}) b->Args({side, threads});
+    for (int threads : thread_counts()) b->Args({side, threads});
   b->ArgNames({"side", "threads"})->Unit(benchmark::kMillisecond)->UseRealTime();
 }
 
 void scenes(benchmark::internal::Benchmark* b) {
   for (int scene : {0, 1})
-    for (int threads : {1, 2}) b->Args({scene, threads});
+    for (int threads : thread_counts()) b->Args({scene, threads});
   b->ArgNames({"scene", "threads"})->Unit(benchmark::kMillisecond)->UseRealTime();
 }
 

@@ -526,3 +526,64 @@ TEST(CliCloth, NonManifoldObjIsBadInput) {
   EXPECT_NE(r.err.find("fan.obj"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("non-manifold"), std::string::npos) << r.err;
 }
+
+// ---- bench ---------------------------------------------------------------------------------------
+
+namespace {
+
+// A two-particle pendulum: a bench of it takes a fraction of a second.
+const char* kPendulum = R"({ "name": "pendulum", "domain": { "min": [-1,-1,-1], "max": [1,1,1] },
+  "output": { "frames": 5 },
+  "particles": [ { "x": [0,0.5,0], "mass": 0 }, { "x": [0.3,0.5,0], "mass": 1 } ],
+  "distance_constraints": [ { "i": 0, "j": 1 } ] })";
+
+std::size_t lines(const std::string& s) { return std::size_t(std::count(s.begin(), s.end(), '\n')); }
+
+}  // namespace
+
+TEST(CliBench, SweepWritesACsvRowPerRunAndThePlot) {
+  const fs::path scene = write_scene("pendulum.json", kPendulum), out = work_dir() / "bench_ok";
+  const Result r = seiche("bench '" + scene.string() + "' --sweep substeps=1,2,4 --sweep iterations=1,2 --out '" +
+                          out.string() + "' --reference-substeps 16");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::string csv = slurp(out / "bench.csv");
+  EXPECT_EQ(lines(csv), 1u + 6u + 2u) << csv;  // header, 3 x 2 settings, reference and check
+  EXPECT_EQ(csv.rfind("role,solver.substeps,solver.iterations,", 0), 0u) << csv;
+  EXPECT_NE(r.out.find("reference: implicit Euler, 16 steps per frame"), std::string::npos) << r.out;
+  EXPECT_NE(r.err.find("run 8/8"), std::string::npos) << r.err;  // progress, one line per run
+  const std::string png = slurp(out / "bench.png");
+  ASSERT_GT(png.size(), 8u) << r.err;
+  EXPECT_EQ(png.substr(1, 3), "PNG");
+  EXPECT_FALSE(fs::exists(out / "bench.png.tmp"));
+}
+
+TEST(CliBench, BadSweepIsBadInputAndWritesNothing) {
+  const fs::path scene = write_scene("pendulum.json", kPendulum), out = work_dir() / "bench_bad";
+  for (const std::string& args : {std::string("--sweep substeps"), std::string("--sweep substeps=1,0"),
+                                  std::string("--sweep substeps=1 --sweep solver.substeps=2"),
+                                  std::string("--reference exact")}) {
+    const Result r = seiche("bench '" + scene.string() + "' " + args + " --out '" + out.string() + "'");
+    EXPECT_EQ(r.code, 2) << args << ": " << r.err;
+    EXPECT_NE(r.err.find("error"), std::string::npos) << args;
+    EXPECT_FALSE(fs::exists(out)) << args;
+  }
+  const Result fluid = seiche("bench --reference implicit --out '" + out.string() + "'");
+  EXPECT_EQ(fluid.code, 2);
+  EXPECT_NE(fluid.err.find("the scene has fluid"), std::string::npos) << fluid.err;
+  const Result zero = seiche("bench '" + scene.string() + "' --sweep substeps=1,0 --out '" + out.string() + "'");
+  EXPECT_NE(zero.err.find("solver.substeps"), std::string::npos) << zero.err;
+  const Result size = seiche("bench --stability --size huge");
+  EXPECT_EQ(size.code, 2) << size.err;
+  EXPECT_NE(size.err.find("--size"), std::string::npos) << size.err;
+}
+
+TEST(CliBench, PlotThatCannotBeDrawnIsExitCode3AndKeepsTheCsv) {
+  const fs::path scene = write_scene("pendulum.json", kPendulum), out = work_dir() / "bench_noplot";
+  const Result r = seiche("bench '" + scene.string() + "' --sweep substeps=1 --sweep iterations=1 --out '" +
+                              out.string() + "' --reference-substeps 4",
+                          "SEICHE_PLOT_SCRIPT=/nonexistent/plot.py");
+  EXPECT_EQ(r.code, 3) << r.err;
+  EXPECT_NE(r.err.find("/nonexistent/plot.py"), std::string::npos) << r.err;
+  EXPECT_EQ(lines(slurp(out / "bench.csv")), 4u);
+  EXPECT_FALSE(fs::exists(out / "bench.png"));
+}

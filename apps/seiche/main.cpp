@@ -1,6 +1,7 @@
 // seiche: the command line. Thin: parse arguments, load the scene, run or bake it, map errors to
 // exit codes (0 ok, 2 bad input, 3 output could not be written, 4 the simulation diverged,
-// 130 a bake stopped by Ctrl-C / SIGTERM with a checkpoint to resume from).
+// 5 a stability case of `seiche bench --stability` failed, 130 a bake stopped by Ctrl-C / SIGTERM
+// with a checkpoint to resume from).
 //
 // Test hooks (environment variables, for tests/app_tests.cpp; not for users):
 //   SEICHE_TEST_INTERRUPT_AFTER_FRAME=k  a bake raises SIGINT after frame k's files are written,
@@ -24,7 +25,9 @@
 #include <fmt/format.h>
 #include <unistd.h>
 
+#include "bench_command.hpp"
 #include "seiche/bake.hpp"
+#include "seiche/bench.hpp"
 #include "seiche/cloth_obj_exporter.hpp"
 #include "seiche/output_files.hpp"
 #include "seiche/runner.hpp"
@@ -262,6 +265,47 @@ int main(int argc, char** argv) {
       ->excludes(bake_frames_opt)
       ->excludes(bake_set_opt);
 
+  seiche_cli::BenchArgs bench;
+  CLI::App* bench_cmd = app.add_subcommand(
+      "bench", "Error against run time: sweep settings against a converged reference (CSV and plot), or run "
+               "the stability suite");
+  bench_cmd->footer(
+      "Example: seiche bench scenes/flag.json --sweep substeps=1,2,4,8,16 --sweep iterations=1,2,4,8 --frames 60\n"
+      "Writes DIR/bench.csv (one row per setting, then the reference and its check) and DIR/bench.png.\n"
+      "--stability runs the stiff and extreme cases instead and writes DIR/stability.csv; exit code 5 if one fails.");
+  auto* bench_scene_opt =
+      bench_cmd->add_option("scene", bench.scene, "Scene file (JSON); default: the built-in dam break");
+  auto* bench_sweep_opt = bench_cmd->add_option(
+      "--sweep", bench.sweeps,
+      "KEY=V1,V2,...: a scene key and its values (a key without a dot is a solver key); repeat for more keys; "
+      "default: substeps=1,2,4,8,16 and iterations=1,2,4,8");
+  auto* bench_frames_opt =
+      bench_cmd->add_option("--frames", bench.frames, "Frames per run (default: the scene's output.frames)")
+          ->check(CLI::PositiveNumber);
+  bench_cmd->add_option("--out", bench.out, "Output folder (default: out/bench/<scene name>, out/stability)");
+  bench_cmd->add_option("--threads", bench.threads, "Worker threads (default: all cores)")->check(CLI::PositiveNumber);
+  auto* bench_set_opt =
+      bench_cmd->add_option("--set", bench.overrides, "Override a scene value by its JSON path for every run");
+  auto* bench_ref_opt =
+      bench_cmd->add_option("--reference", bench.reference,
+                            "auto (implicit Euler where the scene allows it, else XPBD), xpbd or implicit")
+          ->capture_default_str();
+  auto* bench_ref_sub_opt = bench_cmd->add_option("--reference-substeps", bench.reference_substeps,
+                                                  "Reference substeps (default: 4x the largest swept, at least 64)")
+                                ->check(CLI::PositiveNumber);
+  auto* bench_ref_it_opt = bench_cmd->add_option(
+      "--reference-iterations", bench.reference_iterations,
+      "XPBD reference iterations (default: 2x the largest swept, at least 16)")->check(CLI::PositiveNumber);
+  bool no_plot = false;
+  CLI::Option* bench_no_plot = bench_cmd->add_flag("--no-plot", no_plot, "Write the CSV only (no matplotlib)");
+  auto* bench_stability = bench_cmd->add_flag("--stability", bench.stability, "Run the stability suite instead");
+  bench_cmd->add_option("--size", bench.size, "Stability suite size: full or reduced (as in CI)")
+      ->capture_default_str()
+      ->needs(bench_stability);
+  for (CLI::Option* o : {bench_scene_opt, bench_sweep_opt, bench_frames_opt, bench_set_opt, bench_ref_opt, bench_ref_sub_opt,
+                  bench_ref_it_opt, bench_no_plot})
+    bench_stability->excludes(o);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -272,10 +316,17 @@ int main(int argc, char** argv) {
   try {
     if (*run_cmd) return run_command(run);
     if (*bake_cmd) return bake_command(bake);
+    if (*bench_cmd) {
+      bench.plot = !no_plot;
+      return seiche_cli::bench_command(bench);
+    }
   } catch (const seiche::SceneError& e) {
     std::cerr << "seiche: error: " << e.what() << "\n";
     return kExitBadInput;
   } catch (const seiche::ResumeError& e) {
+    std::cerr << "seiche: error: " << e.what() << "\n";
+    return kExitBadInput;
+  } catch (const seiche::BenchError& e) {
     std::cerr << "seiche: error: " << e.what() << "\n";
     return kExitBadInput;
   } catch (const UsageError& e) {

@@ -51,6 +51,7 @@ class ClothSolver {
   void create(ParticleStore& store, std::size_t first, const kernels::ParticleView& view);
 
   bool has_bending() const { return dihedral_.size() + isometric_.size() > 0; }
+  bool has_dihedral_bending() const { return dihedral_.size() > 0; }
   bool has_tethers() const { return tethers_.groups() > 0; }
   /// Half the thickness of each cloth: its particles' collision radius.
   std::span<const float> collision_radius() const { return radius_; }
@@ -66,6 +67,10 @@ class ClothSolver {
   void solve_bending(const kernels::ParticleView& p, float dt);
   void solve_tethers(const kernels::ParticleView& p);
   void remap(std::span<const std::uint32_t> new_index);
+
+  /// The constraints as built (store indices), for the implicit-Euler reference of the bench.
+  const kernels::DistanceConstraints& stretch() const { return stretch_; }
+  const kernels::IsometricBending& isometric() const { return isometric_; }
 
   /// Strain and bending error at positions x.
   ClothError measure(const kernels::ParticleView& p) const;

@@ -28,6 +28,8 @@ class DistanceSolver {
     for (auto& k : constraints_.i) k = new_index[k];
     for (auto& k : constraints_.j) k = new_index[k];
   }
+  /// The constraints as built (store indices), for the implicit-Euler reference of the bench.
+  const kernels::DistanceConstraints& constraints() const { return constraints_; }
   DistanceConstraintError measure(const kernels::ParticleView& p) const {
     const auto e = kernels::distance_constraint_error(p, constraints_);
     return {e.mean, e.max};

@@ -48,33 +48,19 @@ void print_run_summary(std::ostream& out, const SceneDef& scene, const RunResult
                e.total_seconds * 1e3 / std::max(r.frames, 1),
                total > 0 ? 100.0 * e.total_seconds / total : 0.0);
   if (r.metrics.empty()) return;
-  // Error of each active constraint family: mean over frames of the frame mean, and the
-  // largest frame max.
-  auto family = [&](const char* name, auto get) {
-    double mean = 0.0, max = 0.0;
-    for (const FrameMetrics& m : r.metrics) {
-      const auto e = get(m);
-      mean += e.mean;
-      max = std::max(max, e.max);
-    }
-    fmt::print(out, "{:<16} {:>9.3f}% {:>9.3f}%\n", name, 100.0 * mean / r.metrics.size(),
-               100.0 * max);
-  };
+  // Error of each active constraint family over the run (summarize_errors).
+  const RunErrors e = summarize_errors(r.metrics);
   fmt::print(out, "\n{:<16} {:>10} {:>10}\n", "error", "mean", "max");
-  if (r.metrics.front().fluid)
-    family("fluid density", [](const FrameMetrics& m) { return *m.fluid; });
-  if (r.metrics.front().distance)
-    family("distance", [](const FrameMetrics& m) { return *m.distance; });
-  if (r.metrics.front().cloth) {
-    family("cloth strain", [](const FrameMetrics& m) {
-      return DistanceConstraintError{m.cloth->strain_mean, m.cloth->strain_max};
-    });
-    // Bending error is an angle: shown in degrees, not percent.
-    double mean = 0.0, max = 0.0;
-    for (const FrameMetrics& m : r.metrics) mean += m.cloth->bending_mean, max = std::max(max, m.cloth->bending_max);
+  auto percent = [&](const char* name, const std::optional<RunError>& f) {
+    if (f) fmt::print(out, "{:<16} {:>9.3f}% {:>9.3f}%\n", name, 100.0 * f->mean, 100.0 * f->max);
+  };
+  percent("fluid density", e.density);
+  percent("distance", e.distance);
+  percent("cloth strain", e.strain);
+  if (e.bending) {  // an angle: shown in degrees, not percent
     constexpr double kDegrees = 180.0 / 3.14159265358979323846;
-    fmt::print(out, "{:<16} {:>8.3f}deg {:>7.3f}deg\n", "cloth bending", kDegrees * mean / r.metrics.size(),
-               kDegrees * max);
+    fmt::print(out, "{:<16} {:>8.3f}deg {:>7.3f}deg\n", "cloth bending", kDegrees * e.bending->mean,
+               kDegrees * e.bending->max);
   }
   const FrameMetrics& last = r.metrics.back();
   fmt::print(out, "\nlast frame: kinetic energy {:.4g} J, max speed {:.3g} m/s\n",

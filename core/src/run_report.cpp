@@ -37,8 +37,10 @@ void RunReport::add_frame(const FrameMetrics& m, const PassTimer& timer) {
     f["cloth_bending_error"] = {{"mean", m.cloth->bending_mean}, {"max", m.cloth->bending_max}};
   }
   f["kinetic_energy"] = m.kinetic_energy;
+  f["potential_energy"] = m.potential_energy;
   f["max_speed"] = m.max_speed;
   f["non_finite"] = m.non_finite;
+  f["outside_domain"] = m.outside_domain;
   doc_["frames"].push_back(std::move(f));
 }
 

@@ -88,6 +88,7 @@ kernels::CollisionShape to_shape(const ColliderDef& c, const MeshSdf* sdf) {
 
 Simulation::Simulation(const SceneDef& scene) : scene_(scene) {
   create_particles();
+  move_into_domain();
   create_distance_constraints();
   create_colliders();
   assemble_pipeline();
@@ -151,6 +152,25 @@ void Simulation::create_particles() {
     if (ParticleContactStage::needed(scene_))
       contacts_ = std::make_unique<ParticleContactStage>(*cloth_, scene_.domain,
                                                          fluid_ ? fluid_->particle_radius() : 0.0f);
+  }
+}
+
+// A particle created outside the domain would be projected onto its wall by the first substep,
+// and the velocity update would turn that jump into a speed of jump / dt: so it starts there.
+void Simulation::move_into_domain() {
+  const Vec3 &lo = scene_.domain.min, &hi = scene_.domain.max;
+  for (std::size_t k = 0; k < store_.size(); ++k) {
+    float* x[3] = {&store_.x[k], &store_.y[k], &store_.z[k]};
+    bool moved = false;
+    for (int a = 0; a < 3; ++a) {
+      const float inside = std::clamp(*x[a], lo[a], hi[a]);  // NaN stays NaN (and is reported)
+      if (std::isnan(*x[a]) || inside == *x[a]) continue;
+      *x[a] = inside;
+      moved = true;
+    }
+    if (!moved) continue;
+    ++moved_into_domain_;
+    store_.px[k] = store_.x[k], store_.py[k] = store_.y[k], store_.pz[k] = store_.z[k];
   }
 }
 
@@ -318,9 +338,11 @@ FrameMetrics Simulation::measure() {
   m.time = time_;
   m.particles = store_.size();
   struct Health {
-    double kinetic = 0.0, max_speed2 = 0.0;
-    std::size_t non_finite = 0;
+    double kinetic = 0.0, potential = 0.0, max_speed2 = 0.0;
+    std::size_t non_finite = 0, outside = 0;
   };
+  const Vec3& g = scene_.solver.gravity;
+  const Vec3 &lo = scene_.domain.min, &hi = scene_.domain.max;
   const Health h = blocked_reduce(
       store_.size(), Health{},
       [&](std::size_t b, std::size_t e) {
@@ -331,17 +353,29 @@ FrameMetrics Simulation::measure() {
           for (float v : values) part.non_finite += std::isfinite(v) ? 0 : 1;
           const double v2 = double(store_.vx[i]) * store_.vx[i] + double(store_.vy[i]) * store_.vy[i] +
                             double(store_.vz[i]) * store_.vz[i];
-          if (store_.w[i] > 0.0f) part.kinetic += 0.5 * v2 / store_.w[i];
+          if (store_.w[i] > 0.0f) {
+            part.kinetic += 0.5 * v2 / store_.w[i];
+            const double height = -(double(g[0]) * (store_.x[i] - lo[0]) + double(g[1]) * (store_.y[i] - lo[1]) +
+                                    double(g[2]) * (store_.z[i] - lo[2]));
+            part.potential += height / store_.w[i];
+          }
           part.max_speed2 = std::max(part.max_speed2, v2);
+          const bool inside = store_.x[i] >= lo[0] && store_.x[i] <= hi[0] && store_.y[i] >= lo[1] &&
+                              store_.y[i] <= hi[1] && store_.z[i] >= lo[2] && store_.z[i] <= hi[2];
+          part.outside += inside ? 0 : 1;
         }
         return part;
       },
       [](Health& acc, const Health& p) {
         acc.kinetic += p.kinetic;
+        acc.potential += p.potential;
+        acc.outside += p.outside;
         acc.max_speed2 = std::max(acc.max_speed2, p.max_speed2);
         acc.non_finite += p.non_finite;
       });
   m.kinetic_energy = h.kinetic;
+  m.potential_energy = h.potential;
+  m.outside_domain = h.outside;
   m.max_speed = std::sqrt(h.max_speed2);
   m.non_finite = h.non_finite;
   if (fluid_) {

@@ -4,6 +4,7 @@
 
 #include <cstddef>
 #include <optional>
+#include <span>
 
 namespace seiche {
 
@@ -29,11 +30,31 @@ struct FrameMetrics {
   double time = 0.0;              ///< simulated time at the end of the frame (s)
   std::size_t particles = 0;
   double kinetic_energy = 0.0;    ///< J, sum of m v^2 / 2 over free particles
+  /// J, gravitational energy sum of -m g . (x - domain.min) over free particles (zero on the
+  /// domain's lowest corner), so that kinetic + potential is the mechanical energy.
+  double potential_energy = 0.0;
   double max_speed = 0.0;         ///< m/s
   std::size_t non_finite = 0;     ///< count of NaN / inf values in positions and velocities
+  std::size_t outside_domain = 0; ///< particles whose position is outside the domain box
   std::optional<FluidError> fluid;
   std::optional<DistanceConstraintError> distance;
   std::optional<ClothError> cloth;
 };
+
+/// A constraint family's error over a run: the mean over frames of the frame's mean, and the
+/// largest frame max.
+struct RunError {
+  double mean = 0.0;
+  double max = 0.0;
+};
+
+/// Every active family's error over a run (a family absent from the scene stays empty).
+struct RunErrors {
+  std::optional<RunError> density;   ///< fluid density error
+  std::optional<RunError> distance;  ///< raw distance constraints, |C| / rest_length
+  std::optional<RunError> strain;    ///< cloth strain
+  std::optional<RunError> bending;   ///< cloth bending error (rad)
+};
+RunErrors summarize_errors(std::span<const FrameMetrics> frames);
 
 }  // namespace seiche

@@ -62,6 +62,11 @@ class Simulation {
 
   /// The cloths of the scene (meshes, vertex ids, constraint counts), or null when it has none.
   const ClothSolver* cloth() const { return cloth_.get(); }
+  /// The raw distance constraints, or null when the scene has none.
+  const DistanceSolver* distance() const { return distance_.get(); }
+  /// How many particles were created outside the domain and moved to its nearest point (only
+  /// a scene built in code can do that: the scene loader rejects such files).
+  std::size_t moved_into_domain() const { return moved_into_domain_; }
 
   /// Names of the passes this scene's pipeline runs, in order.
   std::vector<std::string> pipeline() const;
@@ -80,6 +85,7 @@ class Simulation {
   };
 
   void create_particles();
+  void move_into_domain();
   void create_distance_constraints();
   void create_colliders();
   void assemble_pipeline();
@@ -107,6 +113,7 @@ class Simulation {
   std::vector<Pass> constraint_passes_;     // run every iteration, in order
   std::vector<Pass> velocity_passes_;       // run after the velocity update
   std::vector<std::function<void(std::span<const std::uint32_t>)>> index_remappers_;
+  std::size_t moved_into_domain_ = 0;
   int frame_ = 0;
   double time_ = 0.0;
 };

@@ -1,0 +1,536 @@
+// The kernel families that bench_pbf (PBF density), bench_neighbor (grid + neighbor list) and
+// bench_cloth_kernels (stretch, dihedral and isometric bending) do not cover, one kernel call per
+// benchmark iteration, at 64k, 262k and 1M particles.
+//
+// Set-ups (fixed seeds; built once per size and kept, each benchmark run starts from a fresh
+// copy of the particles, so that no run depends on what ran before):
+//   block n:  n^3 particles, n = 40, 64, 100 (64,000 / 262,144 / 1,000,000), on bench_pbf's
+//             lattice (spacing s = 0.05 m, compressed by 2 %, jittered by +-1 % of s), sorted into
+//             cell order; velocities a smooth swirl of 1 m/s plus +-0.1 m/s noise; predicted
+//             positions p = x + dt v, dt = 1/600 s; all free (w = 1), fluid.
+//   sheet n:  n x n cloth vertices, n = 256, 512, 1024 (65,536 / 262,144 / 1,048,576), 1 cm apart
+//             in the xz plane.
+// Benchmarks, Args: n (as above), threads:
+//   Predict, UpdateVelocities, DampVelocities (integrate.hpp) on block n. Damping alternates the
+//     factors f and 1/f (f = exp(-1/s dt)) so that velocities neither decay to denormals nor grow.
+//   Collisions (collisions.hpp) on block n, fluid radius s/2, against the domain box (shrunk by
+//     s/2 so that the outer layer touches it), a tilted plane (cuts off the bottom quarter), a
+//     sphere (r = 0.3 L, L = the block's side), a capsule (r = 0.15 L, across the block) and a
+//     torus as an SDF sampled on 64^3 voxels spanning the block (every particle samples it);
+//     friction 0.3 everywhere. in_contact: the fraction of particles the call moves.
+//   XsphViscosity, Vorticity (compute_vorticity), VorticityConfinement (its second pass) on
+//     block n with bench_pbf's neighbor list (h = 2 s, about 31 neighbors) and volumes m / rho
+//     from one PBF density pass; XSPH c = 0.01, confinement epsilon = 0.01; the vorticity the
+//     second pass reads is the first pass's.
+//   DistanceChains (distance_constraint.hpp) on block n in lattice order: the n^2 rows along x are
+//     chains of n particles, n^2 (n - 1) stiff-ish links (compliance 1e-8 m/N, rest length s, so
+//     every link is active), two colors; one XPBD iteration per call.
+//   Tethers (tethers.hpp) on sheet n: the row z = 0 pinned, every other vertex tied to its 4
+//     nearest pinned vertices (as cloth_solver.cpp does), max length its rest distance; the
+//     predicted positions are stretched 3 % away from the pins and jittered by +-0.2 cm.
+//     violated: the fraction of tethers longer than allowed.
+//   ParticleContacts (particle_contacts.hpp) on two cloths of n x n/2 vertices (n^2 in all)
+//     stacked 0.7 r apart (contact distance r = 1 cm, the cloths' thickness), jittered by
+//     +-0.15 r, with the candidates the contact stage would find (a vertex and its 4 lattice
+//     neighbors on the other cloth: those within 1.5 r), each pair listed from both sides;
+//     friction 0.3 on a sideways substep motion of up to 0.05 r. active: the fraction of
+//     candidate entries in contact.
+//   Collisions, Tethers and ParticleContacts move the particles out of their contacts: their
+//   predicted positions are restored before every call, outside the timing (PauseTiming), so
+//   that every call sees the same contacts.
+// Threads: 1, 2, 4, ... and std::thread::hardware_concurrency() (tbb::global_control).
+// Reported: real time per call (ms); items_per_second (particles, or constraints: links,
+// tethers, contact candidate entries); s_per_particle or s_per_constraint, the time per particle
+// or constraint (seconds in CSV/JSON; the console shows it with an SI prefix: "3.1ns").
+#include <benchmark/benchmark.h>
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <memory>
+#include <numbers>
+#include <random>
+#include <span>
+#include <thread>
+#include <vector>
+
+#include "seiche/kernels/collisions.hpp"
+#include "seiche/kernels/distance_constraint.hpp"
+#include "seiche/kernels/integrate.hpp"
+#include "seiche/kernels/particle_contacts.hpp"
+#include "seiche/kernels/pbf_density.hpp"
+#include "seiche/kernels/phase.hpp"
+#include "seiche/kernels/tethers.hpp"
+#include "seiche/kernels/vorticity_confinement.hpp"
+#include "seiche/kernels/xsph_viscosity.hpp"
+#include "seiche/neighbor/cell_grid.hpp"
+#include "seiche/neighbor/neighbor_list.hpp"
+
+using namespace seiche;
+
+namespace {
+
+constexpr float kSpacing = 0.05f;           // block lattice spacing (m)
+constexpr float kRadius = 2.0f * kSpacing;  // SPH kernel radius h (m)
+constexpr float kSheetSpacing = 0.01f;      // sheet vertex spacing (m)
+constexpr float kDt = 1.0f / 600.0f;        // s: 60 fps, 10 substeps
+constexpr float kFriction = 0.3f;
+
+// ---- Particles ----------------------------------------------------------------------------------
+
+struct Particles {
+  std::vector<float> x, y, z, px, py, pz, vx, vy, vz, w;
+  std::vector<std::uint32_t> phase;
+
+  std::size_t size() const { return x.size(); }
+  kernels::ParticleView view() {
+    return {size(),    x.data(),  y.data(),  z.data(),  px.data(), py.data(),
+            pz.data(), vx.data(), vy.data(), vz.data(), w.data(),  phase.data()};
+  }
+  void restore_predicted(const Particles& from) { px = from.px, py = from.py, pz = from.pz; }
+};
+
+// Block n (see the top of the file). cell_order: sorted by cell of h (as a fluid is); else in
+// lattice order, x fastest.
+Particles make_block(int n, bool cell_order) {
+  Particles p;
+  std::mt19937 rng(42);
+  std::uniform_real_distribution<float> jitter(-0.01f * kSpacing, 0.01f * kSpacing);
+  for (int k = 0; k < n; ++k)
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        p.x.push_back(0.98f * (i + 0.5f) * kSpacing + jitter(rng));
+        p.y.push_back(0.98f * (j + 0.5f) * kSpacing + jitter(rng));
+        p.z.push_back(0.98f * (k + 0.5f) * kSpacing + jitter(rng));
+      }
+  const std::size_t count = p.size();
+  if (cell_order) {
+    const float lo[3] = {0, 0, 0}, hi[3] = {n * kSpacing, n * kSpacing, n * kSpacing};
+    neighbor::CellGrid grid;
+    grid.build(neighbor::make_grid_spec(lo, hi, kRadius), p.x.data(), p.y.data(), p.z.data(),
+               nullptr, count);
+    const auto order = grid.order();
+    for (auto* column : {&p.x, &p.y, &p.z}) {
+      std::vector<float> sorted(count);
+      for (std::size_t k = 0; k < count; ++k) sorted[k] = (*column)[order[k]];
+      column->swap(sorted);
+    }
+  }
+  const float side = n * kSpacing, k = 2.0f * std::numbers::pi_v<float> / side;
+  std::uniform_real_distribution<float> noise(-0.1f, 0.1f);
+  p.vx.resize(count), p.vy.resize(count), p.vz.resize(count);
+  p.px.resize(count), p.py.resize(count), p.pz.resize(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    p.vx[i] = std::sin(k * p.y[i]) + noise(rng);
+    p.vy[i] = std::sin(k * p.z[i]) + noise(rng);
+    p.vz[i] = std::sin(k * p.x[i]) + noise(rng);
+    p.px[i] = p.x[i] + kDt * p.vx[i];
+    p.py[i] = p.y[i] + kDt * p.vy[i];
+    p.pz[i] = p.z[i] + kDt * p.vz[i];
+  }
+  p.w.assign(count, 1.0f);
+  p.phase.assign(count, make_phase(Material::Fluid));
+  return p;
+}
+
+Particles make_cell_block(int n) { return make_block(n, true); }
+
+// Appends a cols x rows sheet in the plane y = height, vertex (r, c) at (c, height, r) * spacing,
+// at rest (p = x, v = 0), free, cloth `group`.
+void add_sheet(Particles& p, int cols, int rows, float height, std::uint32_t group) {
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < cols; ++c) {
+      p.x.push_back(c * kSheetSpacing), p.y.push_back(height), p.z.push_back(r * kSheetSpacing);
+      p.px.push_back(p.x.back()), p.py.push_back(height), p.pz.push_back(p.z.back());
+      p.vx.push_back(0.0f), p.vy.push_back(0.0f), p.vz.push_back(0.0f);
+      p.w.push_back(1.0f);
+      p.phase.push_back(make_phase(Material::Cloth, group));
+    }
+}
+
+// ---- The set-ups of the benchmarks --------------------------------------------------------------
+
+struct CollisionScene {
+  Particles particles;
+  std::vector<float> sdf_values;
+  kernels::SdfGrid sdf;  // values -> sdf_values (a vector's buffer survives moves)
+  kernels::CollisionParams params;
+  float side = 0.0f;  // L (m)
+  float in_contact = 0.0f;
+
+  // The shapes point at `sdf`: made where the scene sits.
+  std::array<kernels::CollisionShape, 4> shapes() const {
+    using Kind = kernels::CollisionShape::Kind;
+    const float L = side;
+    std::array<kernels::CollisionShape, 4> s;
+    const float tilt = 1.0f / std::sqrt(1.04f);  // plane normal (0.2, 1, 0) normalized
+    s[0] = {Kind::Plane, {0.5f * L, 0.25f * L, 0.5f * L}, {0.2f * tilt, tilt, 0}, 0.0f, kFriction,
+            nullptr};
+    s[1] = {Kind::Sphere, {0.3f * L, 0.5f * L, 0.5f * L}, {0, 0, 0}, 0.3f * L, kFriction, nullptr};
+    s[2] = {Kind::Capsule,
+            {0.6f * L, 0.2f * L, 0.2f * L},
+            {0.6f * L, 0.8f * L, 0.8f * L},
+            0.15f * L,
+            kFriction,
+            nullptr};
+    s[3] = {Kind::Sdf, {0, 0, 0}, {0, 0, 0}, 0.0f, kFriction, &sdf};
+    return s;
+  }
+};
+
+CollisionScene make_collision_scene(int n) {
+  CollisionScene s;
+  s.particles = make_block(n, true);
+  const float L = s.side = n * kSpacing;
+  for (int a = 0; a < 3; ++a)
+    s.params.domain_min[a] = 0.5f * kSpacing, s.params.domain_max[a] = L - 0.5f * kSpacing;
+  s.params.domain_friction = kFriction;
+  s.params.fluid_radius = 0.5f * kSpacing;
+  // A torus around the y axis through (0.7, 0.6, 0.5) L: major radius 0.25 L, minor 0.1 L.
+  constexpr int kVoxels = 64;
+  s.sdf.voxel = L / (kVoxels - 1);
+  for (int a = 0; a < 3; ++a) s.sdf.dims[a] = kVoxels;
+  s.sdf_values.resize(std::size_t(kVoxels) * kVoxels * kVoxels);
+  for (int k = 0; k < kVoxels; ++k)
+    for (int j = 0; j < kVoxels; ++j)
+      for (int i = 0; i < kVoxels; ++i) {
+        const float x = i * s.sdf.voxel - 0.7f * L, y = j * s.sdf.voxel - 0.6f * L,
+                    z = k * s.sdf.voxel - 0.5f * L;
+        const float ring = std::hypot(x, z) - 0.25f * L;
+        s.sdf_values[(std::size_t(k) * kVoxels + j) * kVoxels + i] = std::hypot(ring, y) - 0.1f * L;
+      }
+  s.sdf.values = s.sdf_values.data();
+  // The fraction in contact: the particles one call moves.
+  Particles probe = s.particles;
+  const auto shapes = s.shapes();
+  kernels::solve_collisions(probe.view(), s.params, shapes);
+  std::size_t moved = 0;
+  for (std::size_t i = 0; i < probe.size(); ++i)
+    moved += probe.px[i] != s.particles.px[i] || probe.py[i] != s.particles.py[i] ||
+             probe.pz[i] != s.particles.pz[i];
+  s.in_contact = float(double(moved) / double(probe.size()));
+  return s;
+}
+
+struct FluidBlock {
+  Particles particles;
+  neighbor::NeighborList list;
+  std::vector<kernels::Float4> pos_volume, vel_volume;  // (x, y, z, m/rho), (vx, vy, vz, m/rho)
+  std::vector<float> omega_x, omega_y, omega_z, omega_norm;
+
+  kernels::NeighborSpan span() const { return {list.offsets.data(), list.indices.data()}; }
+};
+
+FluidBlock make_fluid_block(int n) {
+  FluidBlock b;
+  b.particles = make_block(n, true);
+  Particles& p = b.particles;
+  const std::size_t count = p.size();
+  const float lo[3] = {0, 0, 0}, hi[3] = {n * kSpacing, n * kSpacing, n * kSpacing};
+  neighbor::CellGrid grid;  // on the sorted positions: order() is the identity
+  grid.build(neighbor::make_grid_spec(lo, hi, kRadius), p.x.data(), p.y.data(), p.z.data(), nullptr,
+             count);
+  neighbor::build_neighbor_list(grid, p.x.data(), p.y.data(), p.z.data(), count, kRadius, b.list);
+
+  kernels::PbfParams prm;  // as bench_pbf
+  prm.h = kRadius;
+  prm.mass = float(1000.0 / kernels::lattice_kernel_sum(kSpacing, kRadius));
+  prm.epsilon = float(0.01 * kernels::lattice_lambda_denominator(kSpacing, kRadius));
+  prm.lambda_scale = float(1.0 / kernels::lattice_lambda_denominator(kSpacing, kRadius));
+  b.pos_volume.resize(count), b.vel_volume.resize(count);
+  for (std::size_t i = 0; i < count; ++i) b.pos_volume[i] = {p.x[i], p.y[i], p.z[i], 0.0f};
+  std::vector<float> density(count), lambda(count);
+  kernels::pbf_density_lambda(b.pos_volume.data(), b.span(), count, prm, density.data(),
+                              lambda.data());
+  for (std::size_t i = 0; i < count; ++i) {
+    const float volume = prm.mass / density[i];
+    b.pos_volume[i].w = volume;
+    b.vel_volume[i] = {p.vx[i], p.vy[i], p.vz[i], volume};
+  }
+  b.omega_x.resize(count), b.omega_y.resize(count), b.omega_z.resize(count),
+      b.omega_norm.resize(count);
+  kernels::compute_vorticity(b.pos_volume.data(), b.vel_volume.data(), b.span(), count, kRadius,
+                             b.omega_x.data(), b.omega_y.data(), b.omega_z.data());
+  for (std::size_t i = 0; i < count; ++i)
+    b.omega_norm[i] = std::sqrt(b.omega_x[i] * b.omega_x[i] + b.omega_y[i] * b.omega_y[i] +
+                                b.omega_z[i] * b.omega_z[i]);
+  return b;
+}
+
+struct Chains {
+  Particles particles;
+  kernels::DistanceConstraints links;
+};
+
+Chains make_chains(int n) {
+  Chains c;
+  c.particles = make_block(n, false);  // row (j, k) is particles [(k n + j) n, (k n + j + 1) n)
+  std::vector<std::uint32_t> i, j;
+  for (std::uint32_t row = 0; row < std::uint32_t(n) * n; ++row)
+    for (std::uint32_t k = 0; k + 1 < std::uint32_t(n); ++k)
+      i.push_back(row * n + k), j.push_back(row * n + k + 1);
+  const std::vector<float> rest(i.size(), kSpacing), compliance(i.size(), 1e-8f);
+  kernels::color_distance_constraints(i, j, rest, compliance, c.particles.size(), c.links);
+  return c;
+}
+
+struct TetherSheet {
+  Particles particles;
+  kernels::Tethers tethers;
+  float violated = 0.0f;
+};
+
+TetherSheet make_tether_sheet(int n) {
+  constexpr std::size_t kPerVertex = 4;  // cloth_solver.cpp's kTethersPerVertex
+  TetherSheet s;
+  Particles& p = s.particles;
+  add_sheet(p, n, n, 0.0f, 0);
+  std::fill_n(p.w.begin(), n, 0.0f);  // row 0: pinned vertices 0 .. n-1
+  kernels::Tethers& t = s.tethers;
+  t.start.push_back(0);
+  std::vector<int> cols;
+  for (int r = 1; r < n; ++r)
+    for (int c = 0; c < n; ++c) {
+      cols.clear();  // the nearest pinned vertices: columns by |dc|, the lower first on ties
+      auto take = [&](int col) {
+        if (col >= 0 && col < n && cols.size() < kPerVertex) cols.push_back(col);
+      };
+      take(c);
+      for (int dc = 1; dc <= 3; ++dc) take(c - dc), take(c + dc);
+      for (int col : cols) {
+        t.anchor.push_back(std::uint32_t(col));
+        t.max_length.push_back(kSheetSpacing * std::hypot(float(col - c), float(r)));
+      }
+      t.particle.push_back(std::uint32_t(r * n + c));
+      t.start.push_back(std::uint32_t(t.anchor.size()));
+    }
+  std::mt19937 rng(42);
+  std::uniform_real_distribution<float> jitter(-0.2f * kSheetSpacing, 0.2f * kSheetSpacing);
+  for (std::size_t i = std::size_t(n); i < p.size(); ++i)
+    p.px[i] += jitter(rng), p.py[i] += jitter(rng), p.pz[i] = 1.03f * p.pz[i] + jitter(rng);
+  std::size_t violated = 0;
+  for (std::size_t g = 0; g < t.groups(); ++g)
+    for (std::uint32_t k = t.start[g]; k < t.start[g + 1]; ++k) {
+      const std::uint32_t i = t.particle[g], a = t.anchor[k];
+      violated +=
+          std::hypot(p.px[i] - p.px[a], p.py[i] - p.py[a], p.pz[i] - p.pz[a]) > t.max_length[k];
+    }
+  s.violated = float(double(violated) / double(t.anchor.size()));
+  return s;
+}
+
+struct ContactSheets {
+  Particles particles;
+  kernels::ParticleContacts contacts;
+  float active = 0.0f;
+};
+
+ContactSheets make_contact_sheets(int n) {
+  constexpr float kContact = kSheetSpacing;  // r: the cloths' thickness
+  // A vertex's candidates on the other cloth: (row, column) offsets within 1.5 r.
+  static constexpr std::array<int, 2> kStencil[] = {{0, 0}, {-1, 0}, {0, -1}, {0, 1}, {1, 0}};
+  ContactSheets s;
+  Particles& p = s.particles;
+  const int cols = n, rows = n / 2;
+  add_sheet(p, cols, rows, 0.0f, 0);
+  add_sheet(p, cols, rows, 0.7f * kContact, 1);
+  std::mt19937 rng(42);
+  std::uniform_real_distribution<float> jitter(-0.15f * kContact, 0.15f * kContact);
+  std::uniform_real_distribution<float> motion(-0.05f * kContact, 0.05f * kContact);
+  for (std::size_t i = 0; i < p.size(); ++i) {  // substep start x = p - a small sideways motion
+    p.px[i] += jitter(rng), p.py[i] += jitter(rng), p.pz[i] += jitter(rng);
+    p.x[i] = p.px[i] - motion(rng), p.y[i] = p.py[i], p.z[i] = p.pz[i] - motion(rng);
+  }
+  kernels::ParticleContacts& c = s.contacts;
+  c.clear();
+  const std::size_t per_sheet = std::size_t(cols) * rows;
+  std::size_t active = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const std::size_t sheet = i / per_sheet, other = (1 - sheet) * per_sheet;
+    const int r = int((i % per_sheet) / cols), col = int(i % cols);
+    c.particle.push_back(std::uint32_t(i));
+    for (const auto& [dr, dc] : kStencil) {
+      if (r + dr < 0 || r + dr >= rows || col + dc < 0 || col + dc >= cols) continue;
+      const std::size_t j = other + std::size_t(r + dr) * cols + std::size_t(col + dc);
+      c.partner.push_back(std::uint32_t(j));
+      c.distance.push_back(kContact);
+      active += std::hypot(p.px[i] - p.px[j], p.py[i] - p.py[j], p.pz[i] - p.pz[j]) < kContact;
+    }
+    c.start.push_back(std::uint32_t(c.partner.size()));
+  }
+  s.active = float(double(active) / double(c.partner.size()));
+  return s;
+}
+
+// ---- Benchmark plumbing -------------------------------------------------------------------------
+
+// The set-up for size n, built on first use and kept until another size is asked for (a run
+// calls a benchmark function several times; 1M-particle set-ups take a second or so).
+template <auto make>
+const auto& cached(int n) {
+  using T = decltype(make(n));
+  static std::unique_ptr<T> value;
+  static int built = -1;
+  if (built != n) value.reset(), value = std::make_unique<T>(make(n)), built = n;
+  return *value;
+}
+
+// items_per_second and s_per_<unit> (seconds per particle or constraint, shown with an SI prefix:
+// "3.1ns") for `items` particles or constraints per call.
+void report(benchmark::State& state, double items, const char* counter) {
+  state.SetItemsProcessed(std::int64_t(state.iterations()) * std::int64_t(items));
+  state.counters[counter] = benchmark::Counter(
+      items, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+}
+
+// Times `call` once per iteration.
+template <class Call>
+void time_calls(benchmark::State& state, Call&& call) {
+  for (auto _ : state) {
+    call();
+    benchmark::ClobberMemory();
+  }
+}
+
+// The same, restoring p's predicted positions from `setup` before every call (not timed).
+template <class Call>
+void time_calls_restoring(benchmark::State& state, Particles& p, const Particles& setup,
+                          Call&& call) {
+  for (auto _ : state) {
+    state.PauseTiming();
+    p.restore_predicted(setup);
+    state.ResumeTiming();
+    call();
+    benchmark::ClobberMemory();
+  }
+}
+
+tbb::global_control thread_limit(const benchmark::State& state) {
+  return tbb::global_control(tbb::global_control::max_allowed_parallelism,
+                             std::size_t(state.range(1)));
+}
+
+// ---- Benchmarks ---------------------------------------------------------------------------------
+
+template <void (*kernel)(Particles&, bool)>
+void BM_Integrate(benchmark::State& state) {
+  const auto threads = thread_limit(state);
+  Particles p = cached<make_cell_block>(int(state.range(0)));
+  bool odd = false;
+  time_calls(state, [&] { kernel(p, odd = !odd); });
+  state.counters["particles"] = double(p.size());
+  report(state, double(p.size()), "s_per_particle");
+}
+
+void predict(Particles& p, bool) {
+  const float gravity[3] = {0.0f, -9.81f, 0.0f};
+  kernels::predict_positions(p.view(), kDt, gravity);
+}
+void update(Particles& p, bool) { kernels::update_velocities(p.view(), kDt); }
+void damp(Particles& p, bool odd) {
+  const float f = std::exp(-1.0f * kDt);
+  kernels::damp_velocities(p.view(), odd ? f : 1.0f / f);
+}
+
+void BM_Collisions(benchmark::State& state) {
+  const auto threads = thread_limit(state);
+  const CollisionScene& scene = cached<make_collision_scene>(int(state.range(0)));
+  Particles p = scene.particles;
+  const auto shapes = scene.shapes();
+  time_calls_restoring(state, p, scene.particles,
+                       [&] { kernels::solve_collisions(p.view(), scene.params, shapes); });
+  state.counters["particles"] = double(p.size());
+  state.counters["in_contact"] = scene.in_contact;
+  report(state, double(p.size()), "s_per_particle");
+}
+
+enum class FluidPass { Xsph, Vorticity, Confinement };
+
+template <FluidPass pass>
+void BM_Fluid(benchmark::State& state) {
+  const auto threads = thread_limit(state);
+  const FluidBlock& b = cached<make_fluid_block>(int(state.range(0)));
+  const std::size_t n = b.particles.size();
+  std::vector<float> ox(n), oy(n), oz(n);  // the output: new velocities, or omega
+  time_calls(state, [&] {
+    if constexpr (pass == FluidPass::Xsph)
+      kernels::xsph_viscosity(b.pos_volume.data(), b.vel_volume.data(), b.span(), n, kRadius, 0.01f,
+                              ox.data(), oy.data(), oz.data());
+    if constexpr (pass == FluidPass::Vorticity)
+      kernels::compute_vorticity(b.pos_volume.data(), b.vel_volume.data(), b.span(), n, kRadius,
+                                 ox.data(), oy.data(), oz.data());
+    if constexpr (pass == FluidPass::Confinement)  // adds to ox, oy, oz (never read back)
+      kernels::apply_vorticity_confinement(
+          b.pos_volume.data(), b.omega_norm.data(), b.omega_x.data(), b.omega_y.data(),
+          b.omega_z.data(), b.span(), n, kRadius, 0.01f, kDt, ox.data(), oy.data(), oz.data());
+  });
+  state.counters["particles"] = double(n);
+  state.counters["neighbors_per_particle"] = double(b.list.indices.size()) / double(n);
+  report(state, double(n), "s_per_particle");
+}
+
+void BM_DistanceChains(benchmark::State& state) {
+  const auto threads = thread_limit(state);
+  Chains c = cached<make_chains>(int(state.range(0)));
+  time_calls(state, [&] { kernels::solve_distance_constraints(c.particles.view(), c.links, kDt); });
+  state.counters["particles"] = double(c.particles.size());
+  state.counters["constraints"] = double(c.links.size());
+  state.counters["colors"] = double(c.links.color_start.size() - 1);
+  report(state, double(c.links.size()), "s_per_constraint");
+}
+
+void BM_Tethers(benchmark::State& state) {
+  const auto threads = thread_limit(state);
+  const TetherSheet& s = cached<make_tether_sheet>(int(state.range(0)));
+  Particles p = s.particles;
+  time_calls_restoring(state, p, s.particles, [&] { kernels::solve_tethers(p.view(), s.tethers); });
+  state.counters["particles"] = double(p.size());
+  state.counters["constraints"] = double(s.tethers.anchor.size());
+  state.counters["violated"] = s.violated;
+  report(state, double(s.tethers.anchor.size()), "s_per_constraint");
+}
+
+void BM_ParticleContacts(benchmark::State& state) {
+  const auto threads = thread_limit(state);
+  const ContactSheets& s = cached<make_contact_sheets>(int(state.range(0)));
+  Particles p = s.particles;
+  std::vector<float> scratch;
+  time_calls_restoring(state, p, s.particles, [&] {
+    kernels::solve_particle_contacts(p.view(), s.contacts, kFriction, scratch);
+  });
+  state.counters["particles"] = double(p.size());
+  state.counters["constraints"] = double(s.contacts.partner.size());
+  state.counters["active"] = s.active;
+  report(state, double(s.contacts.partner.size()), "s_per_constraint");
+}
+
+// Args: every size, with 1, 2, 4, ... threads and all of them.
+void args(benchmark::internal::Benchmark* b, std::initializer_list<int> sizes) {
+  const int all = int(std::max(1u, std::thread::hardware_concurrency()));
+  for (int n : sizes) {
+    for (int t = 1; t < all; t *= 2) b->Args({n, t});
+    b->Args({n, all});
+  }
+  b->ArgNames({"n", "threads"})->Unit(benchmark::kMillisecond)->UseRealTime();
+}
+void block_sizes(benchmark::internal::Benchmark* b) { args(b, {40, 64, 100}); }
+void sheet_sizes(benchmark::internal::Benchmark* b) { args(b, {256, 512, 1024}); }
+
+}  // namespace
+
+BENCHMARK_TEMPLATE(BM_Integrate, predict)->Name("Predict")->Apply(block_sizes);
+BENCHMARK_TEMPLATE(BM_Integrate, update)->Name("UpdateVelocities")->Apply(block_sizes);
+BENCHMARK_TEMPLATE(BM_Integrate, damp)->Name("DampVelocities")->Apply(block_sizes);
+BENCHMARK(BM_Collisions)->Name("Collisions")->Apply(block_sizes);
+BENCHMARK_TEMPLATE(BM_Fluid, FluidPass::Xsph)->Name("XsphViscosity")->Apply(block_sizes);
+BENCHMARK_TEMPLATE(BM_Fluid, FluidPass::Vorticity)->Name("Vorticity")->Apply(block_sizes);
+BENCHMARK_TEMPLATE(BM_Fluid, FluidPass::Confinement)
+    ->Name("VorticityConfinement")
+    ->Apply(block_sizes);
+BENCHMARK(BM_DistanceChains)->Name("DistanceChains")->Apply(block_sizes);
+BENCHMARK(BM_Tethers)->Name("Tethers")->Apply(sheet_sizes);
+BENCHMARK(BM_ParticleContacts)->Name("ParticleContacts")->Apply(sheet_sizes);
+
+BENCHMARK_MAIN();
