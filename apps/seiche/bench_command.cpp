@@ -76,7 +76,7 @@ int stability_command(const BenchArgs& a) {
   for (std::size_t k = 0; k < cases.size(); ++k) {
     std::cerr << fmt::format("stability: case {}/{}: {} ({})\n", k + 1, cases.size(), cases[k].name,
                              cases[k].description);
-    results.push_back(seiche::run_stability_case(cases[k], a.threads));
+    results.push_back(seiche::run_stability_case(cases[k], a.threads, &std::cerr));
     const seiche::StabilityResult& r = results.back();
     std::cerr << fmt::format("stability: {}{}\n", r.passed ? "PASS" : "FAIL: ", r.failure);
   }

@@ -16,6 +16,7 @@
 #include "cloth_solver.hpp"
 #include "distance_solver.hpp"
 #include "implicit_reference.hpp"
+#include "progress.hpp"
 #include "seiche/simulation.hpp"
 #include "trajectory.hpp"
 
@@ -76,8 +77,9 @@ std::pair<double, std::string> spacing_of(const Simulation& sim) {
 // One XPBD run of `frames` frames: its time, its constraint errors and, with a reference, its
 // position error; with `record`, its trajectory.
 BenchRun run_xpbd(const SceneDef& scene, int frames, double spacing, const Trajectory* reference,
-                  Trajectory* record) {
+                  Trajectory* record, std::ostream* progress_out, std::string_view label) {
   Simulation sim(scene);
+  Progress progress(progress_out, frames);
   BenchRun run;
   run.substeps = scene.solver.substeps;
   run.iterations = scene.solver.iterations;
@@ -97,7 +99,9 @@ BenchRun run_xpbd(const SceneDef& scene, int frames, double spacing, const Traje
     run.frames = f + 1;
     if (difference) difference->add_frame(std::size_t(f), sim.particles());
     if (record) record->add_frame(sim.particles());
+    progress.frame_done(f + 1, seconds, f + 1, label);
   }
+  progress.end_line();
   run.ms_per_frame = seconds * 1e3 / double(run.frames + (run.diverged ? 1 : 0));
   run.constraint_errors = summarize_errors(metrics);
   if (difference) {
@@ -110,7 +114,9 @@ BenchRun run_xpbd(const SceneDef& scene, int frames, double spacing, const Traje
 // The implicit-Euler reference: `substeps` steps per frame, each solved by Newton's method.
 // Counts the steps whose Newton solve stopped before its tolerance in `unconverged`.
 BenchRun run_implicit(const SceneDef& scene, int substeps, int frames, double spacing,
-                      const Trajectory* reference, Trajectory* record, int& unconverged) {
+                      const Trajectory* reference, Trajectory* record, int& unconverged, std::ostream* progress_out,
+                      std::string_view label) {
+  Progress progress(progress_out, frames);
   const Simulation sim(scene);  // for its initial state and constraints, exactly as XPBD starts
   ImplicitReferenceSystem built = implicit_reference_system(sim);
   const std::vector<std::int32_t> id_of_index = std::move(built.id_of_index);
@@ -138,7 +144,9 @@ BenchRun run_implicit(const SceneDef& scene, int substeps, int frames, double sp
     frame_positions.add_frame(x, id_of_index);
     if (difference) difference->add_frame(std::size_t(f), frame_positions);
     run.frames = f + 1;
+    progress.frame_done(f + 1, seconds, f + 1, label);
   }
+  progress.end_line();
   if (record) *record = std::move(frame_positions);
   run.ms_per_frame = run.frames ? seconds * 1e3 / run.frames : 0.0;
   if (difference) run.error_rms = difference->rms() / spacing, run.error_max = difference->max() / spacing;
@@ -266,6 +274,7 @@ BenchResult run_bench(const SceneFactory& load_scene, const BenchOptions& option
 
   const std::size_t total_runs = settings.size() + 2;
   std::size_t runs_done = 0;
+  auto label = [&](std::string_view what) { return fmt::format("run {}/{} ({})", runs_done + 1, total_runs, what); };
   auto report = [&](const BenchRun& r, std::string_view what) {
     ++runs_done;
     if (!options.progress) return;
@@ -283,20 +292,29 @@ BenchResult run_bench(const SceneFactory& load_scene, const BenchOptions& option
   int unconverged = 0;
   if (implicit) {
     const SceneDef s = reference_scene(ref_substeps);
-    ref = run_implicit(s, ref_substeps, result.frames, result.spacing, nullptr, &reference, unconverged);
-    report(ref, "reference, implicit Euler");
-    check = run_implicit(s, 2 * ref_substeps, result.frames, result.spacing, &reference, nullptr, unconverged);
-    report(check, "reference check, implicit Euler at twice the steps");
+    const char* ref_what = "reference, implicit Euler";
+    ref = run_implicit(s, ref_substeps, result.frames, result.spacing, nullptr, &reference, unconverged,
+                       options.progress, label(ref_what));
+    ref.role = BenchRun::Role::Reference;
+    report(ref, ref_what);
+    const char* check_what = "reference check, implicit Euler at twice the steps";
+    check = run_implicit(s, 2 * ref_substeps, result.frames, result.spacing, &reference, nullptr, unconverged,
+                         options.progress, label(check_what));
+    report(check, check_what);
   } else {
-    ref = run_xpbd(reference_scene(ref_substeps), result.frames, result.spacing, nullptr, &reference);
+    const char* ref_what = "reference, XPBD";
+    ref = run_xpbd(reference_scene(ref_substeps), result.frames, result.spacing, nullptr, &reference, options.progress,
+                   label(ref_what));
     if (ref.diverged)
       throw std::runtime_error(fmt::format("the XPBD reference ({}) diverged after {} frames: it cannot judge anything",
                                            describe(ref), ref.frames));
-    report(ref, "reference, XPBD");
-    check = run_xpbd(reference_scene(2 * ref_substeps), result.frames, result.spacing, &reference, nullptr);
-    report(check, "reference check, XPBD at twice the substeps");
+    ref.role = BenchRun::Role::Reference;
+    report(ref, ref_what);
+    const char* check_what = "reference check, XPBD at twice the substeps";
+    check = run_xpbd(reference_scene(2 * ref_substeps), result.frames, result.spacing, &reference, nullptr,
+                     options.progress, label(check_what));
+    report(check, check_what);
   }
-  ref.role = BenchRun::Role::Reference;
   check.role = BenchRun::Role::ReferenceCheck;
   result.reference =
       implicit ? fmt::format("implicit Euler, {} steps per frame, each solved by Newton's method to 1e-12 m{}",
@@ -305,9 +323,10 @@ BenchResult run_bench(const SceneFactory& load_scene, const BenchOptions& option
                : fmt::format("XPBD, {} substeps x {} iterations", ref_substeps, ref_iterations);
 
   for (std::size_t k = 0; k < settings.size(); ++k) {
-    BenchRun run = run_xpbd(scenes[k], result.frames, result.spacing, &reference, nullptr);
+    const std::string what = fmt::format("{}", fmt::join(overrides_of(axes, settings[k]), ", "));
+    BenchRun run = run_xpbd(scenes[k], result.frames, result.spacing, &reference, nullptr, options.progress, label(what));
     run.values = settings[k];
-    report(run, fmt::format("{}", fmt::join(overrides_of(axes, settings[k]), ", ")));
+    report(run, what);
     result.runs.push_back(std::move(run));
   }
   result.runs.push_back(std::move(ref));

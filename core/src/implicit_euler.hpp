@@ -46,8 +46,10 @@ struct ImplicitEulerSystem {
 /// Per-step statistics of the Newton solve.
 struct ImplicitEulerStats {
   int newton_iterations = 0;  ///< of the last step
-  double gradient_norm = 0.0; ///< |grad Phi|_inf at the end of the last step (N s^2 ... scaled by 1/h^2: N)
-  bool converged = false;     ///< the last step met the tolerance within max_newton_iterations
+  double gradient_norm = 0.0; ///< |grad Phi|_inf / h^2 after the last step: the largest force left (N)
+  /// The last step met the tolerance (or its gradient reached rounding noise) within
+  /// max_newton_iterations; an unconverged step is kept, and the bench counts it.
+  bool converged = false;
 };
 
 class ImplicitEulerStepper {
@@ -60,7 +62,8 @@ class ImplicitEulerStepper {
   ImplicitEulerStepper& operator=(const ImplicitEulerStepper&) = delete;
 
   /// Advances one implicit-Euler step of length h (s). Throws std::runtime_error naming the step
-  /// when Newton produces a non-finite value.
+  /// when Newton produces a non-finite value (the state is left as it was), and
+  /// std::invalid_argument for h <= 0 or non-finite.
   ImplicitEulerStats step(double h);
 
   const std::vector<double>& positions() const;   ///< 3 per particle

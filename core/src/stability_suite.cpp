@@ -12,6 +12,7 @@
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 
+#include "progress.hpp"
 #include "seiche/scene_loader.hpp"
 #include "seiche/simulation.hpp"
 
@@ -245,7 +246,7 @@ std::vector<StabilityCase> stability_cases(SuiteSize size) {
           coincident(full),       far_outside(full),       large_time_step(full), fast_sphere(full)};
 }
 
-StabilityResult run_stability_case(const StabilityCase& c, int threads) {
+StabilityResult run_stability_case(const StabilityCase& c, int threads, std::ostream* progress_out) {
   const int thread_count = threads > 0 ? threads : tbb::info::default_concurrency();
   tbb::global_control control(tbb::global_control::max_allowed_parallelism, std::size_t(thread_count));
   StabilityResult r;
@@ -259,9 +260,11 @@ StabilityResult run_stability_case(const StabilityCase& c, int threads) {
   const int frames = std::max(1, int(std::lround(c.duration / c.scene.solver.frame_dt)));
   if (c.energy_start_frame == 0) r.energy_start = mechanical_energy(initial_metrics(sim));
   r.energy_max = -std::numeric_limits<double>::infinity();
+  Progress progress(progress_out, frames);
   FrameMetrics last;
   for (int f = 1; f <= frames; ++f) {
     last = sim.step_frame();
+    progress.frame_done(f, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), f, c.name);
     r.frames = f;
     r.non_finite = std::max(r.non_finite, last.non_finite);
     r.outside_domain = std::max(r.outside_domain, last.outside_domain);
@@ -271,6 +274,7 @@ StabilityResult run_stability_case(const StabilityCase& c, int threads) {
     if (f == c.energy_start_frame) r.energy_start = e;
     else if (f > c.energy_start_frame) r.energy_max = std::max(r.energy_max, e);
   }
+  progress.end_line();
   r.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   r.lost = r.particles - std::min(r.particles, last.particles);
   const FamilyError worst = worst_final_error(last);

@@ -64,9 +64,9 @@ struct StabilityResult {
   double error_bound = 0.0;        ///< and its bound
 };
 
-/// Runs one case (with `threads` worker threads, 0 = every core); never throws for a diverged
-/// simulation (that is a FAIL).
-StabilityResult run_stability_case(const StabilityCase& c, int threads);
+/// Runs one case (with `threads` worker threads, 0 = every core; progress lines to `progress`
+/// unless null); never throws for a diverged simulation (that is a FAIL).
+StabilityResult run_stability_case(const StabilityCase& c, int threads, std::ostream* progress = nullptr);
 
 /// The results as CSV (a header line and one row per case) and as a table for the terminal.
 std::string stability_csv(const std::vector<StabilityResult>& results);
