@@ -35,6 +35,11 @@
 //     neighbors on the other cloth: those within 1.5 r), each pair listed from both sides;
 //     friction 0.3 on a sideways substep motion of up to 0.05 r. active: the fraction of
 //     candidate entries in contact.
+//   Triad: the memory-bandwidth yardstick for the roofline in docs/performance.md, a STREAM-like
+//     triad a[i] = b[i] + s c[i] on three float arrays of 64 MiB each (16 Mi elements, far past
+//     the 32 MiB L3), split over the threads by tbb::parallel_for (static partition, the arrays
+//     first touched the same way). bytes_per_second counts 12 bytes per element (read b and c,
+//     write a; the write-allocate read of a is not counted, as STREAM does not).
 //   Collisions, Tethers and ParticleContacts move the particles out of their contacts: their
 //   predicted positions are restored before every call, outside the timing (PauseTiming), so
 //   that every call sees the same contacts.
@@ -44,6 +49,7 @@
 // or constraint (seconds in CSV/JSON; the console shows it with an SI prefix: "3.1ns").
 #include <benchmark/benchmark.h>
 #include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <array>
@@ -506,6 +512,34 @@ void BM_ParticleContacts(benchmark::State& state) {
   report(state, double(s.contacts.partner.size()), "s_per_constraint");
 }
 
+// a[i] = b[i] + s c[i] over 64 MiB float arrays (see the top of the file). Args: elements, threads.
+void BM_Triad(benchmark::State& state) {
+  const auto threads = thread_limit(state);
+  const std::size_t n = std::size_t(state.range(0));
+  const auto static_split = [n](auto&& body) {
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, n, 1 << 16),
+        [&](const tbb::blocked_range<std::size_t>& r) { body(r.begin(), r.end()); },
+        tbb::static_partitioner());
+  };
+  std::unique_ptr<float[]> a(new float[n]), b(new float[n]), c(new float[n]);
+  static_split([&](std::size_t i, std::size_t end) {  // first touch by the threads that use them
+    for (; i < end; ++i) a[i] = 0.0f, b[i] = 1.0f, c[i] = 2.0f;
+  });
+  const float s = 3.0f;
+  float* const pa = a.get();
+  const float* const pb = b.get();
+  const float* const pc = c.get();
+  time_calls(state, [&] {
+    static_split([&](std::size_t i, std::size_t end) {
+      for (; i < end; ++i) pa[i] = pb[i] + s * pc[i];
+    });
+  });
+  benchmark::DoNotOptimize(pa[n / 2]);
+  state.SetBytesProcessed(std::int64_t(state.iterations()) * std::int64_t(12 * n));
+  state.counters["elements"] = double(n);
+}
+
 // Args: every size, with 1, 2, 4, ... threads and all of them.
 void args(benchmark::internal::Benchmark* b, std::initializer_list<int> sizes) {
   const int all = int(std::max(1u, std::thread::hardware_concurrency()));
@@ -517,6 +551,10 @@ void args(benchmark::internal::Benchmark* b, std::initializer_list<int> sizes) {
 }
 void block_sizes(benchmark::internal::Benchmark* b) { args(b, {40, 64, 100}); }
 void sheet_sizes(benchmark::internal::Benchmark* b) { args(b, {256, 512, 1024}); }
+void triad_size(benchmark::internal::Benchmark* b) {
+  args(b, {int((std::size_t(64) << 20) / sizeof(float))});  // 64 MiB per array
+  b->ArgNames({"elements", "threads"});
+}
 
 }  // namespace
 
@@ -532,5 +570,6 @@ BENCHMARK_TEMPLATE(BM_Fluid, FluidPass::Confinement)
 BENCHMARK(BM_DistanceChains)->Name("DistanceChains")->Apply(block_sizes);
 BENCHMARK(BM_Tethers)->Name("Tethers")->Apply(sheet_sizes);
 BENCHMARK(BM_ParticleContacts)->Name("ParticleContacts")->Apply(sheet_sizes);
+BENCHMARK(BM_Triad)->Name("Triad")->Apply(triad_size);
 
 BENCHMARK_MAIN();

@@ -1,9 +1,10 @@
 #!/usr/bin/env python3
 """Plots a `seiche bench` CSV: error against wall time per frame, one point per setting.
 
-    python3 benchmarks/plot_bench.py DIR/bench.csv DIR/bench.png [--title TEXT]
+    python3 benchmarks/plot_bench.py DIR/bench.csv DIR/bench.png [--title TEXT] [--unit TEXT]
 
-The y axis (log) is the rms position error against the reference in particle spacings, the x
+The y axis (log) is the rms position error against the reference in units of the scene's
+length (`--unit` names it: the fluid spacing, the mean cloth edge, ...), the x
 axis (log) the wall time per frame. Every swept setting is a labelled point; the Pareto front
 (the `pareto` column the C++ side computed: no other setting is both faster and more accurate)
 is drawn as a line; the reference check's error (how far the reference itself can be trusted)
@@ -14,6 +15,7 @@ import csv
 import math
 import os
 import sys
+import textwrap
 
 import matplotlib
 
@@ -31,6 +33,7 @@ def main():
     parser.add_argument("csv")
     parser.add_argument("png")
     parser.add_argument("--title", default="")
+    parser.add_argument("--unit", default="particle spacings", help="what the error is measured in")
     args = parser.parse_args()
 
     with open(args.csv, newline="") as f:
@@ -68,8 +71,8 @@ def main():
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel("wall time per frame (ms)")
-    ax.set_ylabel("rms position error against the reference (particle spacings)")
-    ax.set_title(args.title, fontsize=9)
+    ax.set_ylabel(f"rms position error against the reference\n(in units of {args.unit})")
+    ax.set_title("\n".join(textwrap.wrap(args.title, 100)), fontsize=9)
     ax.grid(True, which="both", linewidth=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()

@@ -41,10 +41,12 @@ std::string shell_quote(const std::string& s) {
 
 // Draws DIR/bench.png from DIR/bench.csv with matplotlib. Returns false (after saying why) when
 // it could not.
-bool draw_plot(const std::filesystem::path& csv, const std::filesystem::path& png, const std::string& title) {
+bool draw_plot(const std::filesystem::path& csv, const std::filesystem::path& png, const std::string& title,
+               const std::string& unit) {
   const std::filesystem::path script = plot_script();
-  const std::string command = fmt::format("{} {} {} {} --title {}", python(), shell_quote(script.string()),
-                                          shell_quote(csv.string()), shell_quote(png.string()), shell_quote(title));
+  const std::string command =
+      fmt::format("{} {} {} {} --title {} --unit {}", python(), shell_quote(script.string()), shell_quote(csv.string()),
+                  shell_quote(png.string()), shell_quote(title), shell_quote(unit));
   if (!std::filesystem::exists(script)) {
     std::cerr << fmt::format("seiche: error: the plot script {} does not exist (set SEICHE_PLOT_SCRIPT); {} is complete\n",
                              script.string(), csv.string());
@@ -120,7 +122,8 @@ int bench_command(const BenchArgs& a) {
   const std::string title =
       fmt::format("{}: {} frames, {} particles, {} threads; reference: {}", result.scene, result.frames,
                   result.particles, result.threads, result.reference);
-  if (!draw_plot(dir / "bench.csv", dir / "bench.png", title)) return kExitIo;
+  const std::string unit = fmt::format("{}, {:.4g} m", result.spacing_source, result.spacing);
+  if (!draw_plot(dir / "bench.csv", dir / "bench.png", title, unit)) return kExitIo;
   std::cout << fmt::format("plot: {}\n", (dir / "bench.png").string());
   return 0;
 }
