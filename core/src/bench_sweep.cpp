@@ -172,6 +172,37 @@ std::string describe(const BenchRun& r) {
 
 std::string format_value(double v) { return std::isfinite(v) ? fmt::format("{:.6g}", v) : "inf"; }
 
+// The sweep as loaded: every combination's values and scene, and the base scene.
+struct LoadedSweep {
+  std::vector<SweepAxis> axes;
+  std::vector<std::vector<std::string>> settings;
+  std::vector<SceneDef> scenes;
+  SceneDef base;
+  int max_substeps = 1, max_iterations = 1;
+  bool implicit_reference = false;
+};
+
+LoadedSweep load_sweep(const SceneFactory& load_scene, const BenchOptions& options) {
+  LoadedSweep l;
+  l.axes = options.sweep.empty() ? default_sweep() : options.sweep;
+  std::set<std::string> keys;
+  for (const SweepAxis& a : l.axes)
+    if (!keys.insert(a.key).second) throw BenchError(fmt::format("--sweep: {} is swept twice", a.key));
+  l.settings = combinations(l.axes);
+  for (const auto& values : l.settings) {
+    l.scenes.push_back(load_scene(overrides_of(l.axes, values)));
+    l.max_substeps = std::max(l.max_substeps, l.scenes.back().solver.substeps);
+    l.max_iterations = std::max(l.max_iterations, l.scenes.back().solver.iterations);
+  }
+  l.base = load_scene({});
+  const std::string unsupported = implicit_reference_unsupported(l.base);
+  if (options.reference == ReferenceKind::ImplicitEuler && !unsupported.empty())
+    throw BenchError(fmt::format("--reference implicit: {}", unsupported));
+  l.implicit_reference = options.reference == ReferenceKind::ImplicitEuler ||
+                         (options.reference == ReferenceKind::Auto && unsupported.empty());
+  return l;
+}
+
 }  // namespace
 
 SweepAxis parse_sweep(std::string_view text) {
@@ -205,41 +236,6 @@ const BenchRun& BenchResult::reference_check() const {
     if (r.role == BenchRun::Role::ReferenceCheck) return r;
   throw std::logic_error("BenchResult: no reference check");
 }
-
-namespace {
-
-// The sweep as loaded: every combination's values and scene, and the base scene.
-struct LoadedSweep {
-  std::vector<SweepAxis> axes;
-  std::vector<std::vector<std::string>> settings;
-  std::vector<SceneDef> scenes;
-  SceneDef base;
-  int max_substeps = 1, max_iterations = 1;
-  bool implicit_reference = false;
-};
-
-LoadedSweep load_sweep(const SceneFactory& load_scene, const BenchOptions& options) {
-  LoadedSweep l;
-  l.axes = options.sweep.empty() ? default_sweep() : options.sweep;
-  std::set<std::string> keys;
-  for (const SweepAxis& a : l.axes)
-    if (!keys.insert(a.key).second) throw BenchError(fmt::format("--sweep: {} is swept twice", a.key));
-  l.settings = combinations(l.axes);
-  for (const auto& values : l.settings) {
-    l.scenes.push_back(load_scene(overrides_of(l.axes, values)));
-    l.max_substeps = std::max(l.max_substeps, l.scenes.back().solver.substeps);
-    l.max_iterations = std::max(l.max_iterations, l.scenes.back().solver.iterations);
-  }
-  l.base = load_scene({});
-  const std::string unsupported = implicit_reference_unsupported(l.base);
-  if (options.reference == ReferenceKind::ImplicitEuler && !unsupported.empty())
-    throw BenchError(fmt::format("--reference implicit: {}", unsupported));
-  l.implicit_reference = options.reference == ReferenceKind::ImplicitEuler ||
-                         (options.reference == ReferenceKind::Auto && unsupported.empty());
-  return l;
-}
-
-}  // namespace
 
 void check_bench(const SceneFactory& load_scene, const BenchOptions& options) { load_sweep(load_scene, options); }
 
