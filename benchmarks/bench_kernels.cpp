@@ -62,6 +62,7 @@
 #include <thread>
 #include <vector>
 
+#include "lattice_block.hpp"
 #include "seiche/kernels/collisions.hpp"
 #include "seiche/kernels/distance_constraint.hpp"
 #include "seiche/kernels/integrate.hpp"
@@ -103,27 +104,9 @@ struct Particles {
 Particles make_block(int n, bool cell_order) {
   Particles p;
   std::mt19937 rng(42);
-  std::uniform_real_distribution<float> jitter(-0.01f * kSpacing, 0.01f * kSpacing);
-  for (int k = 0; k < n; ++k)
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i) {
-        p.x.push_back(0.98f * (i + 0.5f) * kSpacing + jitter(rng));
-        p.y.push_back(0.98f * (j + 0.5f) * kSpacing + jitter(rng));
-        p.z.push_back(0.98f * (k + 0.5f) * kSpacing + jitter(rng));
-      }
+  bench::append_jittered_lattice(n, kSpacing, rng, p.x, p.y, p.z);
   const std::size_t count = p.size();
-  if (cell_order) {
-    const float lo[3] = {0, 0, 0}, hi[3] = {n * kSpacing, n * kSpacing, n * kSpacing};
-    neighbor::CellGrid grid;
-    grid.build(neighbor::make_grid_spec(lo, hi, kRadius), p.x.data(), p.y.data(), p.z.data(),
-               nullptr, count);
-    const auto order = grid.order();
-    for (auto* column : {&p.x, &p.y, &p.z}) {
-      std::vector<float> sorted(count);
-      for (std::size_t k = 0; k < count; ++k) sorted[k] = (*column)[order[k]];
-      column->swap(sorted);
-    }
-  }
+  if (cell_order) bench::sort_by_cell(n * kSpacing, kRadius, p.x, p.y, p.z);
   const float side = n * kSpacing, k = 2.0f * std::numbers::pi_v<float> / side;
   std::uniform_real_distribution<float> noise(-0.1f, 0.1f);
   p.vx.resize(count), p.vy.resize(count), p.vz.resize(count);

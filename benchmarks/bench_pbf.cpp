@@ -12,6 +12,7 @@
 #include <tbb/global_control.h>
 
 #include "seiche/kernels/pbf_density.hpp"
+#include "lattice_block.hpp"
 #include "seiche/neighbor/cell_grid.hpp"
 #include "seiche/neighbor/neighbor_list.hpp"
 
@@ -30,23 +31,9 @@ Block make_block(int n) {
   const float s = 0.05f, h = 2.0f * s;
   Block b;
   std::mt19937 rng(42);
-  std::uniform_real_distribution<float> jitter(-0.01f * s, 0.01f * s);
-  for (int k = 0; k < n; ++k)
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i) {
-        // Slightly compressed (2 %), so that the constraints are active as in a real solve.
-        b.x.push_back(0.98f * (i + 0.5f) * s + jitter(rng));
-        b.y.push_back(0.98f * (j + 0.5f) * s + jitter(rng));
-        b.z.push_back(0.98f * (k + 0.5f) * s + jitter(rng));
-      }
+  bench::append_jittered_lattice(n, s, rng, b.x, b.y, b.z);
   const std::size_t count = b.x.size();
-  const float lo[3] = {0, 0, 0}, hi[3] = {n * s, n * s, n * s};
-  neighbor::CellGrid grid;
-  grid.build(neighbor::make_grid_spec(lo, hi, h), b.x.data(), b.y.data(), b.z.data(), nullptr, count);
-  std::vector<float> sx(count), sy(count), sz(count);
-  const auto order = grid.order();
-  for (std::size_t k = 0; k < count; ++k) sx[k] = b.x[order[k]], sy[k] = b.y[order[k]], sz[k] = b.z[order[k]];
-  b.x = sx, b.y = sy, b.z = sz;
+  const neighbor::CellGrid grid = bench::sort_by_cell(n * s, h, b.x, b.y, b.z);
   neighbor::build_neighbor_list(grid, b.x.data(), b.y.data(), b.z.data(), count, h, b.list);
   b.packed.resize(count);
   for (std::size_t k = 0; k < count; ++k) b.packed[k] = {b.x[k], b.y[k], b.z[k], 0.0f};

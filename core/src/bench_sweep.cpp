@@ -67,10 +67,10 @@ std::pair<double, std::string> spacing_of(const Simulation& sim) {
     for (float l : c.rest_length) sum += l;
     return c.size() ? sum / double(c.size()) : 0.0;
   };
-  if (sim.cloth() && mean_rest(sim.cloth()->stretch()) > 0.0)
-    return {mean_rest(sim.cloth()->stretch()), "the mean cloth edge"};
-  if (sim.distance() && mean_rest(sim.distance()->constraints()) > 0.0)
-    return {mean_rest(sim.distance()->constraints()), "the mean rest length of the distance constraints"};
+  if (const double edge = sim.cloth() ? mean_rest(sim.cloth()->stretch()) : 0.0; edge > 0.0)
+    return {edge, "the mean cloth edge"};
+  if (const double link = sim.distance() ? mean_rest(sim.distance()->constraints()) : 0.0; link > 0.0)
+    return {link, "the mean rest length of the distance constraints"};
   return {1.0, "1 m (the scene has no fluid, cloth or distance constraint)"};
 }
 

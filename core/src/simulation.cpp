@@ -332,7 +332,7 @@ void Simulation::restore_state(const ParticleStore& saved, int frames_done) {
   time_ = frame_ * scene_.solver.frame_dt;
 }
 
-FrameMetrics Simulation::measure() {
+FrameMetrics Simulation::state_metrics() const {
   FrameMetrics m;
   m.frame = frame_;
   m.time = time_;
@@ -378,6 +378,11 @@ FrameMetrics Simulation::measure() {
   m.outside_domain = h.outside;
   m.max_speed = std::sqrt(h.max_speed2);
   m.non_finite = h.non_finite;
+  return m;
+}
+
+FrameMetrics Simulation::measure() {
+  FrameMetrics m = state_metrics();
   if (fluid_) {
     // The lists of the last substep were built on its predicted positions; particles have moved
     // since, and a stale list could only miss pairs (under-report). After the update p = x, so

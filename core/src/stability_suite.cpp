@@ -222,22 +222,6 @@ FamilyError worst_final_error(const FrameMetrics& m) {
   return worst;
 }
 
-// The state before the first frame, measured the way frames are.
-FrameMetrics initial_metrics(const Simulation& sim) {
-  FrameMetrics m;
-  const ParticleStore& p = sim.particles();
-  const Vec3& g = sim.scene().solver.gravity;
-  const Vec3& lo = sim.scene().domain.min;
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    if (p.w[i] <= 0.0f) continue;
-    const double v2 = double(p.vx[i]) * p.vx[i] + double(p.vy[i]) * p.vy[i] + double(p.vz[i]) * p.vz[i];
-    m.kinetic_energy += 0.5 * v2 / p.w[i];
-    m.potential_energy -= (double(g[0]) * (p.x[i] - lo[0]) + double(g[1]) * (p.y[i] - lo[1]) +
-                           double(g[2]) * (p.z[i] - lo[2])) / p.w[i];
-  }
-  return m;
-}
-
 }  // namespace
 
 std::vector<StabilityCase> stability_cases(SuiteSize size) {
@@ -258,7 +242,7 @@ StabilityResult run_stability_case(const StabilityCase& c, int threads, std::ost
   r.particles = sim.particles().size();
   r.moved_into_domain = sim.moved_into_domain();
   const int frames = std::max(1, int(std::lround(c.duration / c.scene.solver.frame_dt)));
-  if (c.energy_start_frame == 0) r.energy_start = mechanical_energy(initial_metrics(sim));
+  if (c.energy_start_frame == 0) r.energy_start = mechanical_energy(sim.state_metrics());
   r.energy_max = -std::numeric_limits<double>::infinity();
   Progress progress(progress_out, frames);
   FrameMetrics last;

@@ -68,6 +68,11 @@ class Simulation {
   /// a scene built in code can do that: the scene loader rejects such files).
   std::size_t moved_into_domain() const { return moved_into_domain_; }
 
+  /// The state's health now (energies, max speed, non-finite values, particles outside the
+  /// domain), without the constraint errors: what step_frame's metrics start from, and how a
+  /// caller measures the state before the first frame.
+  FrameMetrics state_metrics() const;
+
   /// Names of the passes this scene's pipeline runs, in order.
   std::vector<std::string> pipeline() const;
 
