@@ -76,6 +76,7 @@ TEST(BenchSweep, ChainSweepHasOneRowPerSettingAndItsErrorFallsWithSubsteps) {
   for (std::size_t k = 0; k < rows.size(); ++k) {
     SCOPED_TRACE(fmt::format("{} substeps", rows[k]->substeps));
     EXPECT_EQ(rows[k]->substeps, 1 << k);
+    EXPECT_EQ(rows[k]->iterations_run, 2.0);  // no fluid: no density tolerance, the fixed count
     EXPECT_FALSE(rows[k]->diverged);
     EXPECT_EQ(rows[k]->frames, 30);
     ASSERT_TRUE(rows[k]->constraint_errors.distance.has_value());

@@ -2,6 +2,7 @@
 // cases, self-collision after the pole scene, determinism, the per-frame OBJ and bad input.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -12,6 +13,7 @@
 #include <tbb/global_control.h>
 
 #include "seiche/frame_exporter.hpp"
+#include "seiche/kernels/distance_tree.hpp"
 #include "seiche/runner.hpp"
 #include "seiche/scene_loader.hpp"
 #include "seiche/simulation.hpp"
@@ -59,22 +61,30 @@ std::uint32_t float_bits(float f) {
 
 TEST(Cloth, HangingSheetStrainWithDefaultSettings) {
   // Default solver settings (8 substeps x 2 iterations) and cloth material, compliance 0, plus
-  // air drag (damping 2/s) so that after 3 s the sheet hangs at rest instead of swinging.
-  // Without tethers the mean strain is low, but the two point pins carry the whole sheet and
-  // Gauss-Seidel cannot take that load to them in 16 iterations per frame: the few edges at the
-  // pins stay stretched (about 40 %, see the issue note). Tethers fix exactly that.
-  double max_strain[2];
-  for (bool tethers : {false, true}) {
-    Simulation sim(load_scene_text(hanging_sheet(tethers), "hanging sheet",
-                                   std::vector<std::string>{"solver.damping=2"}));
+  // air drag (damping 2/s) so that after 3 s the sheet hangs at rest instead of swinging. The two
+  // point pins carry the whole sheet: Gauss-Seidel alone (stretch_forests 0) cannot take that
+  // load to them in 16 iterations per frame, and the few edges at the pins stay stretched (about
+  // 40 %). Tethers fix exactly that; so does the pin forest (stretch_forests 1, an option, off by
+  // default), which solves a spanning forest grown from the pins exactly every iteration.
+  struct Case {
+    bool tethers;
+    int forests;
+    const char* name;
+  };
+  double max_strain[3];
+  const Case cases[3] = {{false, 0, "defaults"}, {true, 0, "with tethers"}, {false, 1, "pin forest"}};
+  for (int k = 0; k < 3; ++k) {
+    Simulation sim(load_scene_text(hanging_sheet(cases[k].tethers), "hanging sheet",
+                                   std::vector<std::string>{"solver.damping=2", fmt::format("cloths.0.stretch_forests={}",
+                                                                                            cases[k].forests)}));
     FrameMetrics m;
     const int frames = int(std::lround(3.0 / sim.scene().solver.frame_dt));  // 3 s
     for (int f = 0; f < frames; ++f) m = sim.step_frame();
     ASSERT_TRUE(m.cloth.has_value());
     ASSERT_EQ(m.non_finite, 0u);
-    SCOPED_TRACE(tethers ? "with tethers" : "without tethers");
+    SCOPED_TRACE(cases[k].name);
     EXPECT_LT(m.cloth->strain_mean, 0.01);
-    max_strain[tethers] = m.cloth->strain_max;
+    max_strain[k] = m.cloth->strain_max;
     // It hangs: the far edge is about a sheet's length below the pins, and nearly at rest.
     float lowest = 10.0f;
     for (std::size_t i = 0; i < sim.particles().size(); ++i) lowest = std::min(lowest, sim.particles().y[i]);
@@ -83,6 +93,138 @@ TEST(Cloth, HangingSheetStrainWithDefaultSettings) {
   }
   EXPECT_LT(max_strain[1], 0.02);
   EXPECT_LT(max_strain[1], 0.1 * max_strain[0]);
+  EXPECT_LT(max_strain[2], 0.05);  // the issue's bound without tethers, with the pin forest
+  EXPECT_LT(max_strain[2], 0.1 * max_strain[0]);
+}
+
+TEST(Cloth, MoreStretchForestsLowerTheStrainOfALargerSheet) {
+  // 64 x 64 vertices: Gauss-Seidel alone leaves the pin edges stretched to several times their
+  // length; the pin forest takes most of that, and forests over the remaining edges (which
+  // carry the tension between the two pins) take the rest.
+  double max_strain[4];
+  for (int forests = 0; forests <= 3; ++forests) {
+    if (forests == 2) continue;
+    Simulation sim(load_scene_text(hanging_sheet(false, 64), "hanging sheet",
+                                   std::vector<std::string>{"solver.damping=2",
+                                                            fmt::format("cloths.0.stretch_forests={}", forests)}));
+    FrameMetrics m;
+    for (int f = 0; f < 180; ++f) m = sim.step_frame();
+    ASSERT_EQ(m.non_finite, 0u);
+    max_strain[forests] = m.cloth->strain_max;
+    if (forests == 3) {
+      EXPECT_LT(m.cloth->strain_mean, 0.005);
+    }
+  }
+  EXPECT_GT(max_strain[0], 1.0);
+  EXPECT_LT(max_strain[1], 0.25);
+  EXPECT_LT(max_strain[3], 0.05);
+}
+
+TEST(Cloth, ForestSolveMatchesTheDenseLinearizedProjection) {
+  // A random tree of 12 particles (particle 0 pinned, the others of random masses) with
+  // stretched and compressed edges of random compliance: one forest solve is one Newton step of
+  // the XPBD projection, (J W J^T + alpha~) dlambda = -C - alpha~ lambda, dx = W J^T dlambda,
+  // which the test solves densely (Gaussian elimination in double) for comparison.
+  const std::size_t n = 12;
+  std::uint32_t seed = 12345;
+  auto uniform = [&seed] {
+    seed = seed * 1664525u + 1013904223u;
+    return double(seed >> 8) / double(1u << 24);
+  };
+  std::vector<float> x(n), y(n), z(n), w(n);
+  std::vector<std::uint32_t> parent(n, kernels::DistanceForest::kRoot), edge(n, 0), particle(n);
+  kernels::DistanceConstraints c;
+  for (std::size_t v = 0; v < n; ++v) {
+    particle[v] = std::uint32_t(v);
+    w[v] = v == 0 ? 0.0f : float(0.5 + 2.0 * uniform());
+    x[v] = float(uniform()), y[v] = float(uniform()), z[v] = float(uniform());
+    if (v == 0) continue;
+    parent[v] = std::uint32_t(uniform() * double(v));  // any earlier vertex
+    edge[v] = std::uint32_t(c.size());
+    c.i.push_back(std::uint32_t(v)), c.j.push_back(parent[v]);
+    const double dx = x[v] - x[parent[v]], dy = y[v] - y[parent[v]], dz = z[v] - z[parent[v]];
+    c.rest_length.push_back(float(std::sqrt(dx * dx + dy * dy + dz * dz) * (0.8 + 0.4 * uniform())));
+    c.compliance.push_back(v % 3 == 0 ? 0.0f : float(1e-4 * uniform()));
+    c.lambda.push_back(float(-1e-3 * uniform()));
+  }
+  const float dt = 0.01f;
+  std::vector<float> px = x, py = y, pz = z, none(n, 0.0f);
+  kernels::ParticleView view;
+  view.n = n, view.x = x.data(), view.y = y.data(), view.z = z.data();
+  view.px = px.data(), view.py = py.data(), view.pz = pz.data();
+  view.vx = view.vy = view.vz = none.data();
+  view.w = w.data();
+  kernels::DistanceForest forest = kernels::make_distance_forest(particle, parent, edge);
+  ASSERT_EQ(forest.trees(), 1u);
+  const std::vector<float> lambda0 = c.lambda;
+  kernels::solve_distance_forest(view, c, forest, dt, nullptr);
+
+  // Dense reference.
+  const std::size_t m = c.size();
+  std::vector<std::array<double, 3>> normal(m);
+  std::vector<double> A(m * m, 0.0), b(m);
+  for (std::size_t e = 0; e < m; ++e) {
+    const std::uint32_t i = c.i[e], j = c.j[e];
+    const double d[3] = {double(x[i]) - x[j], double(y[i]) - y[j], double(z[i]) - z[j]};
+    const double len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    normal[e] = {d[0] / len, d[1] / len, d[2] / len};
+    const double alpha = double(c.compliance[e]) / (double(dt) * dt);
+    b[e] = -(len - c.rest_length[e]) - alpha * lambda0[e];
+    A[e * m + e] += alpha;
+  }
+  for (std::size_t e = 0; e < m; ++e)
+    for (std::size_t f = 0; f < m; ++f)
+      for (std::uint32_t a : {c.i[e], c.j[e]})
+        for (std::uint32_t q : {c.i[f], c.j[f]}) {
+          if (a != q) continue;
+          const double se = a == c.i[e] ? 1.0 : -1.0, sf = q == c.i[f] ? 1.0 : -1.0;
+          const auto &ne = normal[e], &nf = normal[f];
+          A[e * m + f] += w[a] * se * sf * (ne[0] * nf[0] + ne[1] * nf[1] + ne[2] * nf[2]);
+        }
+  for (std::size_t k = 0; k < m; ++k)  // Gaussian elimination (A is SPD: no pivoting)
+    for (std::size_t r = k + 1; r < m; ++r) {
+      const double f = A[r * m + k] / A[k * m + k];
+      for (std::size_t col = k; col < m; ++col) A[r * m + col] -= f * A[k * m + col];
+      b[r] -= f * b[k];
+    }
+  std::vector<double> dlambda(m);
+  for (std::size_t k = m; k-- > 0;) {
+    double sum = b[k];
+    for (std::size_t col = k + 1; col < m; ++col) sum -= A[k * m + col] * dlambda[col];
+    dlambda[k] = sum / A[k * m + k];
+  }
+  std::vector<std::array<double, 3>> dx(n, {0.0, 0.0, 0.0});
+  for (std::size_t e = 0; e < m; ++e)
+    for (int a = 0; a < 3; ++a) {
+      dx[c.i[e]][a] += w[c.i[e]] * normal[e][a] * dlambda[e];
+      dx[c.j[e]][a] -= w[c.j[e]] * normal[e][a] * dlambda[e];
+    }
+  for (std::size_t e = 0; e < m; ++e)
+    EXPECT_NEAR(c.lambda[e] - lambda0[e], dlambda[e], 1e-4 * (1.0 + std::abs(dlambda[e]))) << "edge " << e;
+  for (std::size_t v = 0; v < n; ++v) {
+    EXPECT_NEAR(px[v] - x[v], dx[v][0], 2e-5) << "vertex " << v;
+    EXPECT_NEAR(py[v] - y[v], dx[v][1], 2e-5) << "vertex " << v;
+    EXPECT_NEAR(pz[v] - z[v], dx[v][2], 2e-5) << "vertex " << v;
+  }
+  EXPECT_EQ(px[0], x[0]);  // the pin stays
+}
+
+TEST(Cloth, CompliantSheetStretchesAlikeWithAndWithoutForests) {
+  // XPBD: a compliant cloth's stiffness is the compliance's, not the solver's. Hanging at rest,
+  // a soft 16 x 16 sheet settles to the same mean strain whether or not forests are solved.
+  double mean[2];
+  for (int forests : {0, 1}) {
+    Simulation sim(load_scene_text(hanging_sheet(false, 16), "sheet",
+                                   std::vector<std::string>{"solver.damping=2", "cloths.0.stretch_compliance=0.05",
+                                                            "solver.substeps=20", "solver.iterations=4",
+                                                            fmt::format("cloths.0.stretch_forests={}", forests)}));
+    FrameMetrics m;
+    for (int f = 0; f < 240; ++f) m = sim.step_frame();
+    ASSERT_EQ(m.non_finite, 0u);
+    mean[forests] = m.cloth->strain_mean;
+  }
+  EXPECT_GT(mean[0], 0.01);  // visibly soft
+  EXPECT_NEAR(mean[1], mean[0], 0.1 * mean[0]);
 }
 
 TEST(Cloth, TethersLowerTheStrainAtOneIteration) {
@@ -324,6 +466,7 @@ TEST(Cloth, BadInputNamesTheField) {
       {R"("sheet": { "origin": [0,1,0], "plane": "xx" })", "cloths[0].sheet.plane", "two different axes"},
       {R"("sheet": { "origin": [0,1,0] }, "bending": "cubic")", "cloths[0].bending", "dihedral"},
       {R"("sheet": { "origin": [0,1,0] }, "mass_per_area": -1)", "cloths[0].mass_per_area", "> 0"},
+      {R"("sheet": { "origin": [0,1,0] }, "stretch_forests": 4)", "cloths[0].stretch_forests", "[0, 3]"},
       {R"("sheet": { "origin": [0,1,0] }, "mesh": { "file": "x.obj" })", "cloths[0]", "both"},
       {R"("pins": [0])", "cloths[0]", "needs a shape"},
       {R"("mesh": { "file": "no_such_file.obj" })", "cloths[0].mesh.file", "no_such_file.obj"},

@@ -229,8 +229,11 @@ TEST(Runner, WritesPlyInIdOrderAndAReport) {
   const auto& f3 = rep["frames"][2];
   EXPECT_EQ(f3["frame"], 3);
   EXPECT_EQ(f3["non_finite"], 0);
-  for (const char* pass : {"predict", "neighbors", "fluid density", "distance", "collisions", "update", "viscosity"})
+  for (const char* pass :
+       {"predict", "neighbors", "fluid density", "distance", "collisions", "update", "viscosity"})
     EXPECT_TRUE(f3["pass_ms"].contains(pass)) << pass;
+  EXPECT_EQ(rep["settings"]["density_tolerance"], 0.01);  // as written, not as its float
+  EXPECT_EQ(f3["iterations"]["max"], scene.solver.iterations);  // nothing needed more
   EXPECT_FALSE(f3["pass_ms"].contains("vorticity"));  // off in this scene: not built, not timed
   EXPECT_GE(f3["fluid_density_error"]["max"].get<double>(), f3["fluid_density_error"]["mean"].get<double>());
   EXPECT_LT(f3["distance_error"]["max"].get<double>(), 1e-3);

@@ -44,6 +44,8 @@ void expect_same(const SolverDef& a, const SolverDef& b) {
   EXPECT_EQ(a.frame_dt, b.frame_dt);
   EXPECT_EQ(a.substeps, b.substeps);
   EXPECT_EQ(a.iterations, b.iterations);
+  EXPECT_EQ(a.density_tolerance, b.density_tolerance);
+  EXPECT_EQ(a.max_iterations, b.max_iterations);
   EXPECT_EQ(a.gravity, b.gravity);
   EXPECT_EQ(a.relaxation, b.relaxation);
   EXPECT_EQ(a.tensile_k, b.tensile_k);
@@ -195,7 +197,8 @@ TEST(SceneLoader, AbsentEntryKeysTakeTheStructDefaults) {
 // Every value below is exactly representable as a float, so the comparisons are exact.
 constexpr const char* kFullScene = R"({
   "name": "full",
-  "solver": { "frame_dt": 0.005, "substeps": 7, "iterations": 3, "gravity": [0.5, -4.25, 1],
+  "solver": { "frame_dt": 0.005, "substeps": 7, "iterations": 3, "density_tolerance": 0.0625,
+              "max_iterations": 5, "gravity": [0.5, -4.25, 1],
               "relaxation": 0.125, "tensile_k": 0.25, "tensile_n": 2, "tensile_dq": 0.375 },
   "domain": { "min": [-1, -2, -3], "max": [4, 5, 6], "friction": 0.5 },
   "output": { "frames": 17 },
@@ -219,6 +222,8 @@ TEST(SceneLoader, FullSceneRoundTrips) {
   EXPECT_EQ(s.solver.frame_dt, 0.005);
   EXPECT_EQ(s.solver.substeps, 7);
   EXPECT_EQ(s.solver.iterations, 3);
+  EXPECT_EQ(s.solver.density_tolerance, 0.0625f);
+  EXPECT_EQ(s.solver.max_iterations, 5);
   EXPECT_EQ(s.solver.gravity, (Vec3{0.5f, -4.25f, 1.0f}));
   EXPECT_EQ(s.solver.relaxation, 0.125f);
   EXPECT_EQ(s.solver.tensile_k, 0.25f);
@@ -422,6 +427,10 @@ const BadCase kBadCases[] = {
     {"SubstepsHuge", R"({"solver": {"substeps": 10001}})", "solver.substeps", "must be in [1, 10000]"},
     {"IterationsZero", R"({"solver": {"iterations": 0}})", "solver.iterations", "must be in [1, 10000]"},
     {"IterationsHuge", R"({"solver": {"iterations": 1000000}})", "solver.iterations", "must be in [1, 10000]"},
+    {"DensityToleranceNegative", R"({"solver": {"density_tolerance": -0.01}})", "solver.density_tolerance",
+     "must be in [0, 1), got -0.01"},
+    {"DensityToleranceOne", R"({"solver": {"density_tolerance": 1}})", "solver.density_tolerance", "must be in [0, 1)"},
+    {"MaxIterationsZero", R"({"solver": {"max_iterations": 0}})", "solver.max_iterations", "must be in [1, 10000]"},
     {"RelaxationNegative", R"({"solver": {"relaxation": -0.5}})", "solver.relaxation", "must be >= 0, got -0.5"},
     {"TensileKNegative", R"({"solver": {"tensile_k": -0.1}})", "solver.tensile_k", "must be >= 0"},
     {"TensileNBelowOne", R"({"solver": {"tensile_n": 0}})", "solver.tensile_n", "must be in [1, 8]"},

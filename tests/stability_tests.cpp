@@ -4,9 +4,11 @@
 
 #include <cmath>
 #include <limits>
-#include <set>
+#include <stdexcept>
 #include <string>
+#include <vector>
 
+#include "fluid_solver.hpp"
 #include "seiche/scene_loader.hpp"
 #include "seiche/simulation.hpp"
 #include "seiche/stability.hpp"
@@ -15,11 +17,13 @@ using namespace seiche;
 
 namespace {
 
-// Cases that fail today, with the reason (see the issue note); each must keep failing the same
-// way until it is fixed, when it leaves this list.
-const std::set<std::string> kKnownFailures = {"columns_50ms", "time_step_10x"};
-
 class StabilitySuite : public ::testing::TestWithParam<std::size_t> {};
+
+StabilityCase reduced_case(const std::string& name) {
+  for (StabilityCase& c : stability_cases(SuiteSize::Reduced))
+    if (c.name == name) return c;
+  throw std::invalid_argument("no stability case " + name);
+}
 
 StabilityCase two_particles(const char* name) {
   StabilityCase c;
@@ -39,10 +43,6 @@ TEST_P(StabilitySuite, CasePassesAtReducedSize) {
   const StabilityResult r = run_stability_case(c, 0);
   SCOPED_TRACE(c.name + ": " + c.description);
   EXPECT_EQ(r.frames, int(std::lround(c.duration / c.scene.solver.frame_dt)));
-  if (kKnownFailures.count(c.name)) {
-    EXPECT_FALSE(r.passed) << "fixed: remove " << c.name << " from kKnownFailures";
-    return;
-  }
   EXPECT_TRUE(r.passed) << r.failure;
   EXPECT_EQ(r.non_finite, 0u);
   EXPECT_EQ(r.outside_domain, 0u);
@@ -106,4 +106,53 @@ TEST(StabilityJudge, LargeConstraintErrorFails) {
   EXPECT_EQ(r.error_family, "distance");
   EXPECT_GT(r.final_error, 1.0);
   EXPECT_NE(r.failure.find("distance error"), std::string::npos) << r.failure;
+}
+
+// ---- The fluid's density tolerance -------------------------------------------------------------
+
+TEST(FluidSafeguards, TheDensityToleranceResolvesSubstepsTenTimesTooLong) {
+  // The dam break at 1/48 s substeps: two fixed iterations leave the collapsing column 24 %
+  // compressed, and its rebound gains 14 % energy; iterating to a 1 % mean error does not.
+  StabilityCase c = reduced_case("time_step_10x");
+  ASSERT_EQ(c.scene.solver.density_tolerance, 0.01f);  // the default
+  const StabilityResult with_tolerance = run_stability_case(c, 0);
+  EXPECT_TRUE(with_tolerance.passed) << with_tolerance.failure;
+  c.scene.solver.density_tolerance = 0.0f;
+  const StabilityResult fixed_iterations = run_stability_case(c, 0);
+  EXPECT_FALSE(fixed_iterations.passed);
+  EXPECT_GT(fixed_iterations.energy_max, 1.05 * fixed_iterations.energy_start);
+}
+
+TEST(FluidSafeguards, ExtraIterationsRunOnlyWhileTheFluidIsTooCompressed) {
+  SceneDef scene = load_scene_text(default_scene_json(), "dam break",
+                                   std::vector<std::string>{"fluids.0.spacing=0.05", "solver.frame_dt=0.166667"});
+  Simulation sim(scene);
+  const FrameMetrics first = sim.step_frame();  // the column collapses: more iterations
+  EXPECT_GT(first.iterations_max, scene.solver.iterations);
+  EXPECT_LE(first.iterations_max, scene.solver.max_iterations);
+  EXPECT_GT(first.iterations_mean, double(scene.solver.iterations));
+  // At the default 1/480 s substeps the same fluid never needs more than the fixed two.
+  scene.solver.frame_dt = 1.0 / 60.0;
+  Simulation calm(scene);
+  for (int f = 0; f < 20; ++f) {
+    const FrameMetrics m = calm.step_frame();
+    EXPECT_EQ(m.iterations_max, scene.solver.iterations) << "frame " << f + 1;
+  }
+}
+
+TEST(FluidSafeguards, ArtificialPressureIsTheSameForceAtMoreSubsteps) {
+  // s_corr pushed per iteration whatever dt: at 32 and 48 substeps its force (1/dt^2) made two
+  // colliding columns gain 9 % and 91 % energy. Scaled by (dt / (1/480 s))^2 it does not.
+  SolverDef solver;
+  EXPECT_EQ(tensile_substep_scale(solver), 1.0);  // the default substep is the reference
+  solver.substeps = 16;
+  EXPECT_NEAR(tensile_substep_scale(solver), 0.25, 1e-12);
+  solver.substeps = 2;
+  EXPECT_EQ(tensile_substep_scale(solver), 1.0);  // longer substeps: the paper's push, no more
+  for (int substeps : {32, 48}) {
+    StabilityCase c = reduced_case("columns_50ms");
+    c.scene.solver.substeps = substeps;
+    const StabilityResult r = run_stability_case(c, 0);
+    EXPECT_TRUE(r.passed) << substeps << " substeps: " << r.failure;
+  }
 }

@@ -104,6 +104,9 @@ BenchRun run_xpbd(const SceneDef& scene, int frames, double spacing, const Traje
   progress.end_line();
   run.ms_per_frame = seconds * 1e3 / double(run.frames + (run.diverged ? 1 : 0));
   run.constraint_errors = summarize_errors(metrics);
+  double iterations_run = 0.0;
+  for (const FrameMetrics& m : metrics) iterations_run += m.iterations_mean;
+  run.iterations_run = metrics.empty() ? 0.0 : iterations_run / double(metrics.size());
   if (difference) {
     run.error_rms = run.diverged ? kInfinity : difference->rms() / spacing;
     run.error_max = run.diverged ? kInfinity : difference->max() / spacing;
@@ -335,13 +338,14 @@ std::string bench_csv(const BenchResult& result) {
   std::string csv = "role";
   for (const std::string& key : result.axes) csv += "," + key;
   csv +=
-      ",substeps,iterations,frames,diverged,ms_per_frame,error_rms,error_max,spacing_m,density_error_mean,"
+      ",substeps,iterations,iterations_run,frames,diverged,ms_per_frame,error_rms,error_max,spacing_m,density_error_mean,"
       "density_error_max,distance_error_mean,distance_error_max,strain_mean,strain_max,bending_error_mean,"
       "bending_error_max,pareto\n";
   for (const BenchRun& r : result.runs) {
     csv += r.role == BenchRun::Role::Sweep ? "sweep" : r.role == BenchRun::Role::Reference ? "reference" : "reference_check";
     for (std::size_t a = 0; a < result.axes.size(); ++a) csv += "," + (a < r.values.size() ? r.values[a] : "");
-    csv += fmt::format(",{},{},{},{},{},{},{},{}", r.substeps, r.iterations, r.frames, r.diverged ? 1 : 0,
+    csv += fmt::format(",{},{},{},{},{},{},{},{},{}", r.substeps, r.iterations, format_value(r.iterations_run),
+                       r.frames, r.diverged ? 1 : 0,
                        format_value(r.ms_per_frame), format_value(r.error_rms), format_value(r.error_max),
                        format_value(result.spacing));
     for (const auto* e : {&r.constraint_errors.density, &r.constraint_errors.distance, &r.constraint_errors.strain,
@@ -373,6 +377,11 @@ void print_bench_table(std::ostream& out, const BenchResult& result) {
     if (e.strain) families.strain = e.strain;
     if (e.bending) families.bending = e.bending;
   }
+  // Iterations actually run, when a density tolerance added some to any run.
+  const bool adaptive = std::any_of(result.runs.begin(), result.runs.end(), [](const BenchRun& r) {
+    return r.iterations > 0 && r.iterations_run > r.iterations + 1e-9;
+  });
+  if (adaptive) header.push_back("iterations run");
   for (const char* h : {"ms/frame", "rms error", "max error"}) header.push_back(h);
   if (families.density) header.push_back("density mean/max");
   if (families.distance) header.push_back("distance mean/max");
@@ -391,6 +400,7 @@ void print_bench_table(std::ostream& out, const BenchResult& result) {
   for (const BenchRun& r : result.runs) {
     if (r.role != BenchRun::Role::Sweep) continue;
     std::vector<std::string> cells = r.values;
+    if (adaptive) cells.push_back(fmt::format("{:.2f}", r.iterations_run));
     cells.push_back(fmt::format("{:.2f}", r.ms_per_frame));
     cells.push_back(r.diverged ? "diverged" : fmt::format("{:.3g}", r.error_rms));
     cells.push_back(r.diverged ? fmt::format("at frame {}", r.frames + 1) : fmt::format("{:.3g}", r.error_max));

@@ -51,6 +51,57 @@ std::vector<double> edge_path_distances(const ClothShape& shape, std::uint32_t s
   return d;
 }
 
+// A shortest-path forest (Dijkstra on the rest lengths) over the cloth's edges not yet `used`,
+// grown from all its pinned vertices at once: the paths along which a pin holds the cloth. A
+// piece that no pin reaches grows from its lowest vertex (a free root). Appends the vertices in
+// the order they are settled (a parent before its children), as store indices base + v, with
+// the position of the parent (offset by the positions already in `out`) and the edge's index
+// edge_base + e; marks the edges it takes as used.
+struct RawForest {
+  std::vector<std::uint32_t> particle, parent, edge;
+};
+void grow_shortest_path_forest(const ClothShape& shape, std::size_t base, std::span<const std::uint8_t> pinned,
+                               std::size_t edge_base, std::vector<std::uint8_t>& used, RawForest& out) {
+  constexpr std::uint32_t kRoot = kernels::DistanceForest::kRoot;
+  const auto& x = shape.mesh.positions;
+  const auto& edges = shape.topology.edges;
+  const std::size_t n = x.size();
+  std::vector<std::vector<std::pair<std::uint32_t, std::uint32_t>>> neighbors(n);  // (vertex, edge)
+  for (std::size_t e = 0; e < edges.size(); ++e) {
+    if (used[e]) continue;
+    neighbors[edges[e][0]].push_back({edges[e][1], std::uint32_t(e)});
+    neighbors[edges[e][1]].push_back({edges[e][0], std::uint32_t(e)});
+  }
+  std::vector<double> d(n, std::numeric_limits<double>::infinity());
+  std::vector<std::uint32_t> parent(n, kRoot), parent_edge(n, 0), position(n, 0);
+  std::vector<std::uint8_t> settled(n, 0);
+  using Item = std::pair<double, std::uint32_t>;
+  std::priority_queue<Item, std::vector<Item>, std::greater<>> queue;
+  auto grow = [&] {
+    while (!queue.empty()) {
+      const auto [du, u] = queue.top();
+      queue.pop();
+      if (settled[u] || du > d[u]) continue;
+      settled[u] = 1;
+      position[u] = std::uint32_t(out.particle.size());
+      out.particle.push_back(std::uint32_t(base + u));
+      out.parent.push_back(parent[u] == kRoot ? kRoot : position[parent[u]]);
+      out.edge.push_back(parent[u] == kRoot ? 0u : std::uint32_t(edge_base + parent_edge[u]));
+      if (parent[u] != kRoot) used[parent_edge[u]] = 1;
+      for (const auto& [v, e] : neighbors[u]) {
+        if (settled[v] || pinned[v]) continue;  // a pin is always a root
+        const double dv = du + distance(x[u], x[v]);
+        if (dv < d[v]) d[v] = dv, parent[v] = u, parent_edge[v] = e, queue.push({dv, v});
+      }
+    }
+  };
+  for (std::size_t v = 0; v < n; ++v)
+    if (pinned[v]) d[v] = 0.0, queue.push({0.0, std::uint32_t(v)});
+  grow();
+  for (std::size_t v = 0; v < n; ++v)
+    if (!settled[v]) d[v] = 0.0, queue.push({0.0, std::uint32_t(v)}), grow();
+}
+
 }  // namespace
 
 ClothShape build_cloth_shape(const ClothDef& cloth, std::size_t index, const std::string& file) {
@@ -79,6 +130,7 @@ ClothSolver::~ClothSolver() = default;
 void ClothSolver::create(ParticleStore& store, std::size_t first, const kernels::ParticleView& view) {
   std::vector<std::uint32_t> edge_i, edge_j, hinge_dihedral, hinge_isometric;
   std::vector<float> edge_rest, edge_compliance, bend_dihedral, bend_isometric;
+  std::vector<RawForest> raw_forests;
   std::size_t base = first;
   for (std::size_t c = 0; c < shapes_.size(); ++c) {
     const ClothDef& def = scene_cloths_[c];
@@ -123,9 +175,24 @@ void ClothSolver::create(ParticleStore& store, std::size_t first, const kernels:
       compliance_list.push_back(def.bend_compliance);
     }
     if (def.tethers) build_tethers(c, base, pinned);
+    // Forests of the edges, each over the edges the previous ones left (kernels/distance_tree.hpp).
+    std::vector<std::uint8_t> used(topo.edges.size(), 0);
+    if (raw_forests.size() < std::size_t(def.stretch_forests)) raw_forests.resize(std::size_t(def.stretch_forests));
+    for (int k = 0; k < def.stretch_forests; ++k)
+      grow_shortest_path_forest(shapes_[c], base, pinned, edge_i.size() - topo.edges.size(), used,
+                                raw_forests[std::size_t(k)]);
     base += n;
   }
-  kernels::color_distance_constraints(edge_i, edge_j, edge_rest, edge_compliance, view.n, stretch_);
+  const std::vector<std::uint32_t> source =
+      kernels::color_distance_constraints(edge_i, edge_j, edge_rest, edge_compliance, view.n, stretch_);
+  std::vector<std::uint32_t> colored_index(source.size());
+  for (std::size_t k = 0; k < source.size(); ++k) colored_index[source[k]] = std::uint32_t(k);
+  for (RawForest& raw : raw_forests) {
+    for (std::size_t i = 0; i < raw.edge.size(); ++i)
+      if (raw.parent[i] != kernels::DistanceForest::kRoot) raw.edge[i] = colored_index[raw.edge[i]];
+    forests_.push_back(kernels::make_distance_forest(raw.particle, raw.parent, raw.edge));
+  }
+  if (!forests_.empty()) tension_.assign(stretch_.size(), 0.0f);
   if (!bend_dihedral.empty()) kernels::build_dihedral_bending(hinge_dihedral, bend_dihedral, view, dihedral_);
   if (!bend_isometric.empty())
     kernels::build_isometric_bending(hinge_isometric, bend_isometric, view, isometric_);
@@ -188,12 +255,16 @@ bool ClothSolver::adjacent(std::size_t c, std::uint32_t u, std::uint32_t v) cons
 }
 
 void ClothSolver::begin_substep() {
+  // The forests' geometric stiffness uses the multipliers of the substep before.
+  if (!forests_.empty()) tension_.swap(stretch_.lambda), stretch_.lambda.resize(tension_.size());
   std::fill(stretch_.lambda.begin(), stretch_.lambda.end(), 0.0f);
   std::fill(dihedral_.lambda.begin(), dihedral_.lambda.end(), 0.0f);
   std::fill(isometric_.hinges.lambda.begin(), isometric_.hinges.lambda.end(), 0.0f);
 }
 
+// The forests first: they carry the load to the pins; then Gauss-Seidel over all edges.
 void ClothSolver::solve_stretch(const kernels::ParticleView& p, float dt) {
+  for (kernels::DistanceForest& f : forests_) kernels::solve_distance_forest(p, stretch_, f, dt, tension_.data());
   kernels::solve_distance_constraints(p, stretch_, dt);
 }
 
@@ -210,6 +281,7 @@ void ClothSolver::remap(std::span<const std::uint32_t> new_index) {
   dihedral_.remap(new_index);
   isometric_.hinges.remap(new_index);
   tethers_.remap(new_index);
+  for (auto& f : forests_) f.remap(new_index);
 }
 
 ClothError ClothSolver::measure(const kernels::ParticleView& p) const {

@@ -1,6 +1,9 @@
 // The cloth material: every cloth of a scene (sheets and OBJ meshes) as particles of the store,
 // with its constraints built once and solved every iteration:
-//   stretch   XPBD distance constraints on the mesh edges (kernels/distance_constraint.hpp)
+//   stretch   XPBD distance constraints on the mesh edges (kernels/distance_constraint.hpp), each
+//             iteration first on `stretch_forests` spanning forests of them, solved exactly in
+//             linear time (kernels/distance_tree.hpp; the first grows from the pins), then
+//             color by color
 //   bending   dihedral-angle or isometric hinges, chosen per cloth
 //   tethers   long-range attachments to the pinned vertices (optional, per cloth)
 // Constraints of all cloths share one colored set per family (parallel Gauss-Seidel). The
@@ -17,6 +20,7 @@
 #include "cloth_mesh.hpp"
 #include "seiche/frame_metrics.hpp"
 #include "seiche/kernels/distance_constraint.hpp"
+#include "seiche/kernels/distance_tree.hpp"
 #include "seiche/kernels/hinges.hpp"
 #include "seiche/kernels/isometric_bending.hpp"
 #include "seiche/kernels/particle_view.hpp"
@@ -88,6 +92,8 @@ class ClothSolver {
   kernels::Hinges dihedral_;
   kernels::IsometricBending isometric_;
   kernels::Tethers tethers_;  // all cloths' tethers, appended cloth by cloth
+  std::vector<kernels::DistanceForest> forests_;  // cloth stretch_forests (kernels/distance_tree.hpp)
+  std::vector<float> tension_;  // stretch multipliers of the previous substep
 };
 
 }  // namespace seiche

@@ -26,7 +26,7 @@ FluidSolver::FluidSolver(const FluidDef& material, const SolverDef& solver,
     throw std::invalid_argument("fluid: kernel_radius gives the density constraint no gradient");
   params_.epsilon = float(solver.relaxation * full_denominator);
   params_.lambda_scale = float(1.0 / full_denominator);
-  params_.tensile_k = solver.tensile_k;
+  params_.tensile_k = solver.tensile_k * tensile_substep_scale(solver);
   params_.tensile_n = solver.tensile_n;
   params_.tensile_dq = solver.tensile_dq;
   params_.walls = true;
@@ -38,6 +38,11 @@ FluidSolver::FluidSolver(const FluidDef& material, const SolverDef& solver,
   vorticity_ = material.vorticity;
   store_.enable_fluid_columns();
   if (has_vorticity()) store_.enable_vorticity_columns();
+}
+
+double tensile_substep_scale(const SolverDef& solver) {
+  const double dt = solver.frame_dt / solver.substeps;
+  return std::min(1.0, (dt / kTensileReferenceSubstep) * (dt / kTensileReferenceSubstep));
 }
 
 void FluidSolver::pack_positions(const float* x, const float* y, const float* z) {
@@ -59,11 +64,12 @@ void FluidSolver::pack_velocities_and_volumes() {
   });
 }
 
-void FluidSolver::solve_density() {
+void FluidSolver::solve_density(bool measure_error) {
   const std::size_t n = neighborhood_.count();
   pack_positions(store_.px.data(), store_.py.data(), store_.pz.data());
   kernels::pbf_density_lambda(pos_.data(), neighborhood_.span(), n, params_,
                               store_.density.data(), store_.lambda.data());
+  if (measure_error) predicted_error_ = density_error().mean;
   const float* lambda = store_.lambda.data();
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 8192), [&](const auto& r) {
     for (std::size_t i = r.begin(); i != r.end(); ++i) pos_[i].w = lambda[i];
@@ -101,12 +107,17 @@ void FluidSolver::apply_viscosity() {
 }
 
 FluidError FluidSolver::measure() {
+  if (neighborhood_.count() == 0) return {};
+  pack_positions(store_.x.data(), store_.y.data(), store_.z.data());
+  kernels::pbf_density_lambda(pos_.data(), neighborhood_.span(), neighborhood_.count(), params_,
+                              store_.density.data(), store_.lambda.data());
+  return density_error();
+}
+
+FluidError FluidSolver::density_error() const {
   const std::size_t n = neighborhood_.count();
   FluidError e;
   if (n == 0) return e;
-  pack_positions(store_.x.data(), store_.y.data(), store_.z.data());
-  kernels::pbf_density_lambda(pos_.data(), neighborhood_.span(), n, params_,
-                              store_.density.data(), store_.lambda.data());
   const float* rho = store_.density.data();
   const float inv_rest = 1.0f / params_.rest_density;
   const FluidError sum = blocked_reduce(

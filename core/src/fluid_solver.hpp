@@ -13,6 +13,13 @@
 
 namespace seiche {
 
+/// PBF's artificial pressure is a push per iteration, which as a force grows as 1/dt^2; Seiche
+/// scales it by (dt / kTensileReferenceSubstep)^2, at most 1, so that `tensile_k` means the same
+/// force at any substep shorter than the reference (the default 1/60 s frame in 8 substeps) and
+/// never more than the paper's push at longer ones.
+constexpr double kTensileReferenceSubstep = 1.0 / 480.0;
+double tensile_substep_scale(const SolverDef& solver);
+
 class FluidSolver {
  public:
   /// The domain's walls lend density to the particles next to them (pbf_walls.hpp).
@@ -25,8 +32,11 @@ class FluidSolver {
   bool has_viscosity() const { return viscosity_ > 0.0f; }
   bool has_vorticity() const { return vorticity_ > 0.0f; }
 
-  /// One Jacobi iteration of the density constraints on the predicted positions.
-  void solve_density();
+  /// One Jacobi iteration of the density constraints on the predicted positions. With
+  /// `measure_error`, also the mean density error of those positions before the correction
+  /// (deterministic: blocked sums in index order), read by predicted_density_error().
+  void solve_density(bool measure_error = false);
+  double predicted_density_error() const { return predicted_error_; }
   void apply_vorticity_confinement(float dt);
   void apply_viscosity();
   /// Density error on the current positions x (end of a frame; the neighbor lists must have
@@ -36,6 +46,8 @@ class FluidSolver {
  private:
   void pack_positions(const float* x, const float* y, const float* z);
   void pack_velocities_and_volumes();
+  /// Mean and max of max(rho / rho0 - 1, 0) over the store's density column.
+  FluidError density_error() const;
 
   ParticleStore& store_;
   const Neighborhood& neighborhood_;
@@ -45,6 +57,7 @@ class FluidSolver {
   std::vector<kernels::Float4> pos_;  // (x, y, z, lambda or volume)
   std::vector<kernels::Float4> vel_;  // (vx, vy, vz, volume)
   std::vector<float> omega_norm_;
+  double predicted_error_ = 0.0;
 };
 
 }  // namespace seiche

@@ -62,6 +62,16 @@ void print_run_summary(std::ostream& out, const SceneDef& scene, const RunResult
     fmt::print(out, "{:<16} {:>8.3f}deg {:>7.3f}deg\n", "cloth bending", kDegrees * e.bending->mean,
                kDegrees * e.bending->max);
   }
+  // Extra iterations the density tolerance asked for.
+  double iterations = 0.0;
+  int iterations_max = 0;
+  for (const FrameMetrics& m : r.metrics) {
+    iterations += m.iterations_mean;
+    iterations_max = std::max(iterations_max, m.iterations_max);
+  }
+  if (iterations_max > scene.solver.iterations)
+    fmt::print(out, "\niterations per substep: {:.2f} on average, {} at most (density tolerance {:.3g} %)\n",
+               iterations / double(r.metrics.size()), iterations_max, 100.0 * scene.solver.density_tolerance);
   const FrameMetrics& last = r.metrics.back();
   fmt::print(out, "\nlast frame: kinetic energy {:.4g} J, max speed {:.3g} m/s\n",
              last.kinetic_energy, last.max_speed);

@@ -1,5 +1,9 @@
 #include "run_report.hpp"
 
+#include <string>
+
+#include <fmt/format.h>
+
 namespace seiche {
 
 RunReport::RunReport(const SceneDef& scene, std::size_t particles, int frames, int threads,
@@ -11,6 +15,8 @@ RunReport::RunReport(const SceneDef& scene, std::size_t particles, int frames, i
                       {"frame_dt", scene.solver.frame_dt},
                       {"substeps", scene.solver.substeps},
                       {"iterations", scene.solver.iterations},
+                      {"density_tolerance", std::stod(fmt::format("{}", scene.solver.density_tolerance))},
+                      {"max_iterations", scene.solver.max_iterations},
                       {"threads", threads}};
   doc_["pipeline"] = pipeline;
   doc_["frames"] = nlohmann::json::array();
@@ -30,6 +36,7 @@ void RunReport::add_frame(const FrameMetrics& m, const PassTimer& timer) {
   f["wall_ms"] = wall * 1e3;
   f["pass_ms"] = pass_ms;
   f["particles"] = m.particles;
+  f["iterations"] = {{"mean", m.iterations_mean}, {"max", m.iterations_max}};
   if (m.fluid) f["fluid_density_error"] = {{"mean", m.fluid->mean}, {"max", m.fluid->max}};
   if (m.distance) f["distance_error"] = {{"mean", m.distance->mean}, {"max", m.distance->max}};
   if (m.cloth) {

@@ -246,6 +246,8 @@ SolverDef read_solver(JsonReader r) {
   r.read("frame_dt", s.frame_dt, Range::above(0));
   r.read("substeps", s.substeps, Range::closed(1, kMaxStepsPerFrame));
   r.read("iterations", s.iterations, Range::closed(1, kMaxStepsPerFrame));
+  r.read("density_tolerance", s.density_tolerance, Range::half_open(0, 1));
+  r.read("max_iterations", s.max_iterations, Range::closed(1, kMaxStepsPerFrame));
   r.read("gravity", s.gravity);
   r.read("relaxation", s.relaxation, Range::at_least(0));
   r.read("damping", s.damping, Range::at_least(0));
@@ -431,6 +433,7 @@ ClothDef read_cloth(JsonReader r, std::size_t index) {
   r.read("bend_compliance", c.bend_compliance, Range::above(0));
   r.read_choice("bending", c.bending, {"dihedral", "isometric"});
   r.read("tethers", c.tethers);
+  r.read("stretch_forests", c.stretch_forests, Range::closed(0, 3));
   r.read("self_collision", c.self_collision);
   r.read("friction", c.friction, Range::at_least(0));
   r.read("pins", c.pins, Range::at_least(0));

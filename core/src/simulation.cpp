@@ -208,6 +208,9 @@ void Simulation::create_colliders() {
 
 // Only what this scene needs: a pass whose material or coefficient is absent is not built.
 void Simulation::assemble_pipeline() {
+  const SolverDef& solver = scene_.solver;
+  density_tolerance_ = fluid_ ? solver.density_tolerance : 0.0f;
+  iteration_cap_ = density_tolerance_ > 0.0f ? std::max(solver.iterations, solver.max_iterations) : solver.iterations;
   if (distance_) {
     begin_substep_passes_.push_back({"distance", [this](const StepContext&) { distance_->begin_substep(); }});
   }
@@ -215,7 +218,11 @@ void Simulation::assemble_pipeline() {
     begin_substep_passes_.push_back({"cloth", [this](const StepContext&) { cloth_->begin_substep(); }});
   }
   if (fluid_) {
-    constraint_passes_.push_back({"fluid density", [this](const StepContext&) { fluid_->solve_density(); }});
+    constraint_passes_.push_back({"fluid density", [this](const StepContext& c) {
+                                    // The error is needed from the last fixed iteration on.
+                                    fluid_->solve_density(density_tolerance_ > 0.0f &&
+                                                          c.iteration + 1 >= scene_.solver.iterations);
+                                  }});
   }
   if (distance_) {
     constraint_passes_.push_back({"distance", [this](const StepContext& c) { distance_->solve(view(), c.dt); }});
@@ -273,11 +280,19 @@ FrameMetrics Simulation::step_frame() {
   timer_.begin_frame();
   StepContext ctx;
   ctx.dt = float(scene_.solver.frame_dt / scene_.solver.substeps);
-  for (ctx.substep = 0; ctx.substep < scene_.solver.substeps; ++ctx.substep) substep(ctx);
+  long iterations = 0;
+  int iterations_max = 0;
+  for (ctx.substep = 0; ctx.substep < scene_.solver.substeps; ++ctx.substep) {
+    substep(ctx);
+    iterations += ctx.iteration;
+    iterations_max = std::max(iterations_max, ctx.iteration);
+  }
   ++frame_;
   time_ = frame_ * scene_.solver.frame_dt;
   FrameMetrics m;
   timer_.time("metrics", [&] { m = measure(); });
+  m.iterations_mean = double(iterations) / scene_.solver.substeps;
+  m.iterations_max = iterations_max;
   return m;
 }
 
@@ -287,10 +302,19 @@ void Simulation::substep(StepContext& ctx) {
   if (neighborhood_) timer_.time("neighbors", [&] { find_neighbors(); });
   if (contacts_) timer_.time("contact pairs", [&] { contacts_->find_candidates(store_, neighborhood_.get()); });
   for (const Pass& p : begin_substep_passes_) p.run(ctx);
-  for (ctx.iteration = 0; ctx.iteration < scene_.solver.iterations; ++ctx.iteration)
+  // `iterations` of every constraint pass, then more while the fluid is too compressed (see
+  // SolverDef::density_tolerance); ctx.iteration ends as the number run.
+  for (ctx.iteration = 0; ctx.iteration < iteration_cap_;) {
     for (const Pass& p : constraint_passes_) timer_.time(p.name, [&] { p.run(ctx); });
+    ++ctx.iteration;
+    if (ctx.iteration >= scene_.solver.iterations && !fluid_needs_iteration()) break;
+  }
   timer_.time("update", [&] { kernels::update_velocities(view(), ctx.dt); });
   for (const Pass& p : velocity_passes_) timer_.time(p.name, [&] { p.run(ctx); });
+}
+
+bool Simulation::fluid_needs_iteration() const {
+  return density_tolerance_ > 0.0f && fluid_->predicted_density_error() > density_tolerance_;
 }
 
 void Simulation::find_neighbors() {

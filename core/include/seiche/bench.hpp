@@ -63,6 +63,9 @@ struct BenchRun {
   std::vector<std::string> values;  ///< the swept values (one per axis; empty for the references)
   int substeps = 0;
   int iterations = 0;               ///< 0 for the implicit-Euler reference (Newton to convergence)
+  /// Iterations per substep actually run, the mean over the run: above `iterations` when a
+  /// density tolerance asked for more (0 for the implicit-Euler reference)
+  double iterations_run = 0.0;
   int frames = 0;                   ///< frames completed
   bool diverged = false;            ///< a non-finite value appeared; the run stopped there
   double ms_per_frame = 0.0;        ///< wall time of the simulation, per frame

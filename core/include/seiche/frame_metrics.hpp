@@ -36,6 +36,10 @@ struct FrameMetrics {
   double max_speed = 0.0;         ///< m/s
   std::size_t non_finite = 0;     ///< count of NaN / inf values in positions and velocities
   std::size_t outside_domain = 0; ///< particles whose position is outside the domain box
+  /// Constraint iterations per substep in this frame: their mean and the most in one substep
+  /// (more than solver.iterations only with a density tolerance).
+  double iterations_mean = 0.0;
+  int iterations_max = 0;
   std::optional<FluidError> fluid;
   std::optional<DistanceConstraintError> distance;
   std::optional<ClothError> cloth;

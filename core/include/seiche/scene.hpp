@@ -16,7 +16,12 @@ using Vec3 = std::array<float, 3>;
 struct SolverDef {
   double frame_dt = 1.0 / 60.0;  ///< s, time per output frame
   int substeps = 8;              ///< XPBD substeps per frame (1..10000)
-  int iterations = 2;            ///< constraint iterations per substep (1..10000)
+  int iterations = 2;            ///< constraint iterations per substep (1..10000), at least
+  /// The fluid's mean density error (a fraction, in [0, 1)) the iterations aim for: after the
+  /// first `iterations`, a substep iterates on while the mean of max(rho / rho0 - 1, 0) over the
+  /// fluid, measured at the start of its last iteration, exceeds it; 0 = exactly `iterations`.
+  float density_tolerance = 0.01f;
+  int max_iterations = 32;       ///< cap of those extra iterations (1..10000; never below iterations)
   Vec3 gravity{0.0f, -9.81f, 0.0f};  ///< m/s^2
   /// PBF constraint-force mixing epsilon, relative to the lambda denominator of a particle with
   /// a full rest neighborhood (dimensionless, >= 0): larger is softer and more stable. Below
@@ -24,8 +29,9 @@ struct SolverDef {
   /// columns need 2 iterations even at 0.3.
   float relaxation = 0.3f;
   /// Artificial pressure s_corr = -k (W(r) / W(dq h))^n / D0 against tensile instability (PBF
-  /// eq. 13; D0 as for relaxation).
-  float tensile_k = 0.1f;   ///< k, in units of D0 as for relaxation (>= 0; 0 turns it off)
+  /// eq. 13; D0 as for relaxation), a push per iteration given for a substep of 1/480 s and
+  /// scaled by (dt 480)^2, at most 1: the same force at any shorter substep.
+  float tensile_k = 0.05f;  ///< k, in units of D0 as for relaxation (>= 0; 0 turns it off)
   int tensile_n = 4;        ///< n, an integer in 1..8
   float tensile_dq = 0.2f;  ///< dq as a fraction of the kernel radius, in (0, 1)
   /// Velocity damping c (1/s, >= 0): v *= exp(-c dt) every substep; 0 = off (no pass).
@@ -110,6 +116,11 @@ struct ClothDef {
   float bend_compliance = 1e4f;
   std::string bending = "dihedral"; ///< "dihedral" or "isometric"
   bool tethers = false;             ///< long-range attachments to the pinned vertices
+  /// Spanning forests of the edges (0..3) whose stretch constraints are solved exactly, in linear
+  /// time, every iteration before the Gauss-Seidel sweep: the first grows from the pins and
+  /// carries the cloth's weight to them; each further one takes edges the others left. Off by
+  /// default: at 1 substep per 1/24 s frame the linearized step gains energy (stability tests).
+  int stretch_forests = 0;
   bool self_collision = false;      ///< particle contacts between non-adjacent vertices
   float friction = 0.3f;            ///< Coulomb friction of the cloth's contacts (>= 0)
   std::vector<int> pins;            ///< vertex indices pinned (mass 0)

@@ -5,7 +5,8 @@
 //   predict          v += dt g, p = x + dt v
 //   neighbors        cell keys -> counting sort -> reorder the store -> neighbor lists
 //   contact pairs    candidate particle pairs of cloth contacts (particle_contact_stage.hpp)
-//   iterations x     every constraint pass (fluid density, distance, collisions, ...)
+//   iterations x     every constraint pass (fluid density, distance, collisions, ...); with a
+//                    density tolerance, more while the fluid is too compressed
 //   update           v = (p - x) / dt, x = p
 //   velocity passes  vorticity confinement, XSPH viscosity
 // A pass exists only if the scene needs it; new materials add their passes to the lists.
@@ -96,6 +97,9 @@ class Simulation {
   void assemble_pipeline();
 
   void substep(StepContext& ctx);
+  /// After the fixed iterations: whether the fluid's mean density error at the start of the last
+  /// iteration exceeds solver.density_tolerance (false without fluid or tolerance).
+  bool fluid_needs_iteration() const;
   void find_neighbors();
   /// Reorders the store (new k = old order[k]) and remaps every index held elsewhere.
   void reorder(std::span<const std::uint32_t> order);
@@ -114,6 +118,8 @@ class Simulation {
   std::vector<std::unique_ptr<MeshSdf>> mesh_sdfs_;   // the fields of the mesh colliders
   std::unique_ptr<kernels::CollisionParams> collision_params_;
   std::vector<kernels::CollisionShape> colliders_;
+  float density_tolerance_ = 0.0f;  // 0 without fluid: the fixed iteration count
+  int iteration_cap_ = 1;           // max(iterations, max_iterations) with a tolerance, else iterations
   std::vector<Pass> begin_substep_passes_;  // reset per-substep state (XPBD lambdas)
   std::vector<Pass> constraint_passes_;     // run every iteration, in order
   std::vector<Pass> velocity_passes_;       // run after the velocity update

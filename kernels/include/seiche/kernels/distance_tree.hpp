@@ -1,0 +1,69 @@
+// Exact XPBD projection of a forest of distance constraints in linear time (the sparse
+// elimination of Baraff 1996, "Linear-time dynamics using Lagrange multipliers"; as a PBD solve,
+// Deul et al. 2018, "Direct position-based solver for stiff rods").
+//
+// One XPBD iteration on a set of constraints C_e solves the linearized system
+//   K dx = sum_e grad C_e^T dlambda_e                                    (every particle)
+//   grad C_e . dx + alpha~_e dlambda_e = -C_e - alpha~_e lambda_e =: b_e  (every constraint)
+// with K = M. Gauss-Seidel solves it one constraint at a time, so a load moves about one edge
+// per color and a point pin under a whole sheet is never reached. When the constraints form a
+// forest, the system (particles and constraints as the nodes of one graph) is a forest too, and
+// eliminating it from the leaves to the roots creates no fill-in. Vertex v has one parent edge e
+// to its parent p, n = (x_v - x_p) / |x_v - x_p| (grad_v C_e = n, grad_p C_e = -n); leaves first:
+//   K_v += sum_{children c} n_c n_c^T / d_c,   r_v = -sum_c n_c s_c      (3 x 3, SPD)
+//   u = K_v^-1 n,   d_e = n . u + alpha~_e,   s_e = (b_e - u . r_v) / d_e
+// then from the roots down (a root is fixed if pinned, w = 0, else dx_root = K^-1 r):
+//   dlambda_e = s_e + n . dx_p / d_e,   dx_v = K_v^-1 (n dlambda_e + r_v),   lambda_e += dlambda_e.
+// For one edge to a pin this is the XPBD step dx = w n dlambda, dlambda = b / (w + alpha~).
+//
+// Geometric stiffness. The linearization has no first-order stiffness across an edge, so a
+// load across a taut chain (a flat sheet under gravity) would swing it far in one step. As in
+// Andrews, Teichmann and Kry 2017 ("Geometric stiffness for real-time constrained multibody
+// dynamics"), K gets the diagonal blocks of the geometric stiffness of each forest edge,
+//   K_v = M_v I + sum_{edges e at v} (T_e / l_e) (I - n_e n_e^T),   T_e = max(0, -tension_e),
+// where tension_e is the edge's multiplier of the previous substep (XPBD units, force dt^2).
+// This changes the path of the Newton step, not its fixed point: the multipliers are the
+// constraints' own (shared with the colored solve), so C + alpha~ lambda = 0, and with it the
+// compliance, does not depend on the solve order or the number of iterations.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "seiche/kernels/distance_constraint.hpp"
+#include "seiche/kernels/particle_view.hpp"
+
+namespace seiche::kernels {
+
+/// A forest over particles, tree by tree; inside a tree a vertex comes after its parent, and
+/// the tree's root comes first.
+struct DistanceForest {
+  static constexpr std::uint32_t kRoot = ~0u;
+  std::vector<std::uint32_t> particle;    ///< store index of the vertex at each position
+  std::vector<std::uint32_t> parent;      ///< position of the parent (< own position), or kRoot
+  std::vector<std::uint32_t> edge;        ///< index of the parent edge in the DistanceConstraints
+  std::vector<std::uint32_t> tree_start;  ///< tree t is positions [tree_start[t], tree_start[t+1])
+  std::vector<float> scratch;             ///< 16 floats per position, reused by every solve
+
+  std::size_t size() const { return particle.size(); }
+  std::size_t trees() const { return tree_start.empty() ? 0 : tree_start.size() - 1; }
+  void remap(std::span<const std::uint32_t> new_index);
+};
+
+/// Builds a forest from parent links given in an order where every parent comes before its
+/// children (parent = kRoot for a root; edge ignored there): regroups it tree by tree, keeping
+/// that order inside each tree, and drops roots without children.
+DistanceForest make_distance_forest(std::span<const std::uint32_t> particle,
+                                    std::span<const std::uint32_t> parent,
+                                    std::span<const std::uint32_t> edge);
+
+/// One exact, linearized XPBD projection of the forest's edges (one iteration), with their
+/// rest lengths, compliances and multipliers from `c`; tension[k] (nullable) is constraint k's
+/// multiplier of the previous substep, for the geometric stiffness. Trees run in parallel, each
+/// serially: the result does not depend on the thread count.
+void solve_distance_forest(const ParticleView& p, DistanceConstraints& c, DistanceForest& f, float dt,
+                           const float* tension);
+
+}  // namespace seiche::kernels

@@ -1,0 +1,187 @@
+// Exact projection of a forest of distance constraints (distance_tree.hpp has the math). Per
+// tree, three sweeps over its positions in a 16-float scratch record each:
+//   forward   gather x, the parent edge's n and b, K = M I + geometric stiffness, r = 0
+//   backward  (leaves to root) invert K, eliminate the vertex into its parent: d, s
+//   forward   dlambda and dx from the parent's dx; write p and lambda
+// Trees are independent (disjoint particles and edges): they run in parallel, each serially.
+#include "seiche/kernels/distance_tree.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <cmath>
+
+namespace seiche::kernels {
+
+namespace {
+
+// Scratch record of a position: K (then K^-1) as xx xy xz yy yz zz; r (then dx); n; x (then
+// 1 / d and the vertex's inverse mass); b (then s).
+constexpr std::size_t kStride = 16;
+enum : std::size_t { kK = 0, kR = 6, kN = 9, kX = 12, kInvD = 12, kW = 13, kB = 15, kS = 15 };
+constexpr float kMinLength = 1e-9f;
+
+// In-place inverse of a symmetric positive definite 3 x 3 matrix (cofactors / determinant). K
+// is M I plus positive semidefinite terms with M > 0, so det >= M^3 > 0; guarded all the same.
+inline void invert_spd(float* k) {
+  const float a = k[0], b = k[1], c = k[2], d = k[3], e = k[4], f = k[5];
+  const float c00 = d * f - e * e, c01 = c * e - b * f, c02 = b * e - c * d;
+  const float c11 = a * f - c * c, c12 = b * c - a * e, c22 = a * d - b * b;
+  const float det = a * c00 + b * c01 + c * c02;
+  const float inv = det > 0.0f ? 1.0f / det : 0.0f;
+  k[0] = c00 * inv, k[1] = c01 * inv, k[2] = c02 * inv;
+  k[3] = c11 * inv, k[4] = c12 * inv, k[5] = c22 * inv;
+}
+
+inline void mul_sym(const float* k, const float* v, float* out) {
+  out[0] = k[0] * v[0] + k[1] * v[1] + k[2] * v[2];
+  out[1] = k[1] * v[0] + k[3] * v[1] + k[4] * v[2];
+  out[2] = k[2] * v[0] + k[4] * v[1] + k[5] * v[2];
+}
+
+// k (I - n n^T) added to the symmetric K.
+inline void add_transverse(float* K, float k, const float* n) {
+  K[0] += k - k * n[0] * n[0], K[1] -= k * n[0] * n[1], K[2] -= k * n[0] * n[2];
+  K[3] += k - k * n[1] * n[1], K[4] -= k * n[1] * n[2], K[5] += k - k * n[2] * n[2];
+}
+
+void solve_tree(const ParticleView& p, DistanceConstraints& c, DistanceForest& f, std::size_t begin,
+                std::size_t end, float inv_dt2, const float* tension) {
+  float* const s = f.scratch.data();
+  const std::uint32_t* const parent = f.parent.data();
+  const std::uint32_t* const edge = f.edge.data();
+  const std::uint32_t* const particle = f.particle.data();
+
+  for (std::size_t i = begin; i < end; ++i) {
+    float* v = s + i * kStride;
+    const std::uint32_t a = particle[i];
+    const float w = p.w[a];
+    const float m = w > 0.0f ? 1.0f / w : 0.0f;
+    v[0] = m, v[1] = 0.0f, v[2] = 0.0f, v[3] = m, v[4] = 0.0f, v[5] = m;
+    v[kR] = v[kR + 1] = v[kR + 2] = 0.0f;
+    v[kX] = p.px[a], v[kX + 1] = p.py[a], v[kX + 2] = p.pz[a];
+    float* n = v + kN;
+    n[0] = n[1] = n[2] = 0.0f;
+    v[kB] = 0.0f;
+    if (parent[i] == DistanceForest::kRoot) continue;
+    float* q = s + std::size_t(parent[i]) * kStride;
+    const float dx = v[kX] - q[kX], dy = v[kX + 1] - q[kX + 1], dz = v[kX + 2] - q[kX + 2];
+    const float len = std::sqrt(dx * dx + dy * dy + dz * dz);
+    if (!(len > kMinLength)) continue;  // coincident ends: no direction, the edge is skipped
+    const float inv_len = 1.0f / len;
+    n[0] = dx * inv_len, n[1] = dy * inv_len, n[2] = dz * inv_len;
+    const std::uint32_t e = edge[i];
+    v[kB] = -(len - c.rest_length[e]) - c.compliance[e] * inv_dt2 * c.lambda[e];
+    const float t = tension ? -tension[e] : 0.0f;
+    if (t > 0.0f) {
+      const float k = t * inv_len;
+      add_transverse(v + kK, k, n);
+      add_transverse(q + kK, k, n);
+    }
+  }
+
+  for (std::size_t i = end; i-- > begin;) {
+    float* v = s + i * kStride;
+    const float w = p.w[particle[i]];
+    const bool free = w > 0.0f;
+    if (free) invert_spd(v + kK);
+    v[kInvD] = 0.0f, v[kW] = w, v[kS] = v[kB];
+    if (parent[i] == DistanceForest::kRoot) continue;
+    const float* n = v + kN;
+    float u[3] = {0.0f, 0.0f, 0.0f};
+    if (free) mul_sym(v + kK, n, u);
+    const float d = n[0] * u[0] + n[1] * u[1] + n[2] * u[2] + c.compliance[edge[i]] * inv_dt2;
+    // Skipped (d = 0): coincident ends (n = 0), or a rigid edge to a fixed vertex.
+    if (!(d > 0.0f)) {
+      v[kS] = 0.0f;
+      continue;
+    }
+    const float inv_d = 1.0f / d;
+    const float se = (v[kB] - (u[0] * v[kR] + u[1] * v[kR + 1] + u[2] * v[kR + 2])) * inv_d;
+    v[kInvD] = inv_d, v[kS] = se;
+    float* q = s + std::size_t(parent[i]) * kStride;
+    const float m0 = n[0] * inv_d, m1 = n[1] * inv_d, m2 = n[2] * inv_d;
+    q[0] += m0 * n[0], q[1] += m0 * n[1], q[2] += m0 * n[2];
+    q[3] += m1 * n[1], q[4] += m1 * n[2], q[5] += m2 * n[2];
+    q[kR] -= n[0] * se, q[kR + 1] -= n[1] * se, q[kR + 2] -= n[2] * se;
+  }
+
+  for (std::size_t i = begin; i < end; ++i) {
+    float* v = s + i * kStride;
+    float rhs[3] = {v[kR], v[kR + 1], v[kR + 2]};
+    if (parent[i] != DistanceForest::kRoot && v[kInvD] > 0.0f) {
+      const float* q = s + std::size_t(parent[i]) * kStride;
+      const float* n = v + kN;
+      const float dlambda = v[kS] + (n[0] * q[kR] + n[1] * q[kR + 1] + n[2] * q[kR + 2]) * v[kInvD];
+      c.lambda[edge[i]] += dlambda;
+      rhs[0] += n[0] * dlambda, rhs[1] += n[1] * dlambda, rhs[2] += n[2] * dlambda;
+    }
+    float dx[3] = {0.0f, 0.0f, 0.0f};
+    if (v[kW] > 0.0f) {
+      mul_sym(v + kK, rhs, dx);
+      const std::uint32_t a = particle[i];
+      p.px[a] += dx[0], p.py[a] += dx[1], p.pz[a] += dx[2];
+    }
+    v[kR] = dx[0], v[kR + 1] = dx[1], v[kR + 2] = dx[2];
+  }
+}
+
+}  // namespace
+
+void DistanceForest::remap(std::span<const std::uint32_t> new_index) {
+  for (std::uint32_t& k : particle) k = new_index[k];
+}
+
+DistanceForest make_distance_forest(std::span<const std::uint32_t> particle,
+                                    std::span<const std::uint32_t> parent,
+                                    std::span<const std::uint32_t> edge) {
+  const std::size_t n = particle.size();
+  constexpr std::uint32_t kRoot = DistanceForest::kRoot;
+  // Tree of each position (the position of its root) and whether a root has children.
+  std::vector<std::uint32_t> root(n);
+  std::vector<std::uint8_t> has_child(n, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    root[i] = parent[i] == kRoot ? std::uint32_t(i) : root[parent[i]];
+    if (parent[i] != kRoot) has_child[parent[i]] = 1;
+  }
+  // Trees in the order of their roots, positions in the given order inside each tree.
+  std::vector<std::uint32_t> tree_of_root(n, kRoot), tree_size;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (parent[i] != kRoot || !has_child[i]) continue;
+    tree_of_root[i] = std::uint32_t(tree_size.size());
+    tree_size.push_back(0);
+  }
+  for (std::size_t i = 0; i < n; ++i)
+    if (tree_of_root[root[i]] != kRoot) ++tree_size[tree_of_root[root[i]]];
+  DistanceForest f;
+  f.tree_start.assign(tree_size.size() + 1, 0);
+  for (std::size_t t = 0; t < tree_size.size(); ++t) f.tree_start[t + 1] = f.tree_start[t] + tree_size[t];
+  const std::size_t kept = f.tree_start.back();
+  f.particle.resize(kept), f.parent.resize(kept), f.edge.resize(kept);
+  std::vector<std::uint32_t> cursor(f.tree_start.begin(), f.tree_start.end() - 1), position(n, kRoot);
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::uint32_t t = tree_of_root[root[i]];
+    if (t == kRoot) continue;
+    const std::uint32_t k = cursor[t]++;
+    position[i] = k;
+    f.particle[k] = particle[i];
+    f.parent[k] = parent[i] == kRoot ? kRoot : position[parent[i]];
+    f.edge[k] = parent[i] == kRoot ? 0u : edge[i];
+  }
+  f.scratch.resize(kept * kStride);
+  return f;
+}
+
+void solve_distance_forest(const ParticleView& p, DistanceConstraints& c, DistanceForest& f, float dt,
+                           const float* tension) {
+  const std::size_t trees = f.trees();
+  if (trees == 0) return;
+  const float inv_dt2 = 1.0f / (dt * dt);
+  f.scratch.resize(f.size() * kStride);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, trees, 1), [&](const auto& r) {
+    for (std::size_t t = r.begin(); t != r.end(); ++t)
+      solve_tree(p, c, f, f.tree_start[t], f.tree_start[t + 1], inv_dt2, tension);
+  });
+}
+
+}  // namespace seiche::kernels
