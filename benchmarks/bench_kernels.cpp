@@ -18,6 +18,8 @@
 //     sphere (r = 0.3 L, L = the block's side), a capsule (r = 0.15 L, across the block) and a
 //     torus as an SDF sampled on 64^3 voxels spanning the block (every particle samples it);
 //     friction 0.3 everywhere. in_contact: the fraction of particles the call moves.
+//   CollisionsDomain: the same particles against the domain box alone (friction 0.3), what a
+//     scene without colliders runs; the outer layer of the block touches it.
 //   XsphViscosity, Vorticity (compute_vorticity), VorticityConfinement (its second pass) on
 //     block n with bench_pbf's neighbor list (h = 2 s, about 31 neighbors) and volumes m / rho
 //     from one PBF density pass; XSPH c = 0.01, confinement epsilon = 0.01; the vorticity the
@@ -435,6 +437,17 @@ void BM_Collisions(benchmark::State& state) {
   report(state, double(p.size()), "s_per_particle");
 }
 
+// The domain alone: what a scene without colliders runs (the dam break, the cloth sheets).
+void BM_CollisionsDomain(benchmark::State& state) {
+  const auto threads = thread_limit(state);
+  const CollisionScene& scene = cached<make_collision_scene>(int(state.range(0)));
+  Particles p = scene.particles;
+  time_calls_restoring(state, p, scene.particles,
+                       [&] { kernels::solve_collisions(p.view(), scene.params, {}); });
+  state.counters["particles"] = double(p.size());
+  report(state, double(p.size()), "s_per_particle");
+}
+
 enum class FluidPass { Xsph, Vorticity, Confinement };
 
 template <FluidPass pass>
@@ -545,6 +558,7 @@ BENCHMARK_TEMPLATE(BM_Integrate, predict)->Name("Predict")->Apply(block_sizes);
 BENCHMARK_TEMPLATE(BM_Integrate, update)->Name("UpdateVelocities")->Apply(block_sizes);
 BENCHMARK_TEMPLATE(BM_Integrate, damp)->Name("DampVelocities")->Apply(block_sizes);
 BENCHMARK(BM_Collisions)->Name("Collisions")->Apply(block_sizes);
+BENCHMARK(BM_CollisionsDomain)->Name("CollisionsDomain")->Apply(block_sizes);
 BENCHMARK_TEMPLATE(BM_Fluid, FluidPass::Xsph)->Name("XsphViscosity")->Apply(block_sizes);
 BENCHMARK_TEMPLATE(BM_Fluid, FluidPass::Vorticity)->Name("Vorticity")->Apply(block_sizes);
 BENCHMARK_TEMPLATE(BM_Fluid, FluidPass::Confinement)

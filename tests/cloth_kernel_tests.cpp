@@ -334,6 +334,49 @@ TEST(Hinges, RemapAndBendingError) {
   EXPECT_EQ(h.d[0], 0u);
 }
 
+// The bending error computes its angles lane = hinge (xsimd, double): against dihedral_angle hinge
+// by hinge on random hinges, degenerate ones (a zero-length edge, a flat wing) and rest angles
+// near +-pi included, over several blocks and a partial last batch; the same bits with 1 and 2
+// threads.
+TEST(Hinges, BendingErrorMatchesTheScalarAnglesAndIsThreadCountFree) {
+  const std::size_t n = 3000, m = 9001;
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::uniform_int_distribution<std::uint32_t> pick(0, std::uint32_t(n - 1));
+  Particles p(n);
+  for (std::size_t i = 0; i < n; ++i) p.set(i, u(rng), u(rng), u(rng));
+  p.set(1, 0.5, 0.25, 0.0), p.set(2, 0.5, 0.25, 0.0), p.set(3, 1.5, 0.25, 0.0);  // 1-2 coincide
+  Hinges h;
+  for (std::size_t k = 0; k < m; ++k) {
+    std::uint32_t v[4] = {pick(rng), pick(rng), pick(rng), pick(rng)};
+    if (k == 5) v[0] = 1, v[1] = 2;              // zero-length edge
+    if (k == 6) v[0] = 1, v[1] = 3, v[2] = 2;    // c on the edge: a flat wing
+    h.a.push_back(v[0]), h.b.push_back(v[1]), h.c.push_back(v[2]), h.d.push_back(v[3]);
+    h.rest_angle.push_back(float(k % 3 == 0 ? 3.1 * u(rng) : 0.5 * u(rng)));
+  }
+  double sum = 0.0, max = 0.0;
+  for (std::size_t k = 0; k < m; ++k) {
+    auto at = [&](std::uint32_t i) { return std::array<double, 3>{p.x[i], p.y[i], p.z[i]}; };
+    const auto a = at(h.a[k]), b = at(h.b[k]), c = at(h.c[k]), d = at(h.d[k]);
+    double err = std::abs(dihedral_angle(a.data(), b.data(), c.data(), d.data()) - double(h.rest_angle[k]));
+    if (err > std::numbers::pi) err = 2.0 * std::numbers::pi - err;
+    sum += err, max = std::max(max, err);
+  }
+  BendingError one, two;
+  {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism, 1);
+    one = bending_error(p.view(), h);
+  }
+  {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism, 2);
+    two = bending_error(p.view(), h);
+  }
+  EXPECT_NEAR(one.mean, sum / double(m), 1e-12);
+  EXPECT_NEAR(one.max, max, 1e-12);
+  EXPECT_GT(one.mean, 0.1);  // the hinges are far from their rest angles: a real check
+  EXPECT_EQ(std::memcmp(&one, &two, sizeof(one)), 0);
+}
+
 // ---- Dihedral bending -------------------------------------------------------------------------
 
 // Central finite differences of the (double) dihedral angle with respect to vertex v, axis k.

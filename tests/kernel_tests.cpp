@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <numeric>
 #include <random>
 #include <vector>
@@ -213,6 +214,50 @@ TEST(Integrate, GravityMovesFreeParticlesOnly) {
   EXPECT_NEAR(p.y[0], 1.0f - 0.1f, 1e-6);  // symplectic Euler: x += dt (v + dt g)
   EXPECT_EQ(p.vy[1], 0.0f);
   EXPECT_EQ(p.y[1], 1.0f);
+}
+
+// The integration passes are written lane = particle: every particle must get the bits of the
+// scalar formulas (integrate.hpp), with pinned particles, negative zeros and a count that leaves
+// a partial last batch and cuts the parallel loop into several tasks.
+TEST(Integrate, PassesMatchTheScalarFormulasBitForBit) {
+  const std::size_t n = 20003;
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(-2.0f, 2.0f);
+  Particles p(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    p.set(i, u(rng), u(rng), u(rng));
+    p.vx[i] = u(rng), p.vy[i] = u(rng), p.vz[i] = i % 7 == 0 ? -0.0f : u(rng);
+    p.w[i] = i % 5 == 0 ? 0.0f : 1.0f + u(rng) * u(rng);
+  }
+  const float dt = 1.0f / 300.0f, g[3] = {0.5f, -9.81f, 0.0f}, damping = 0.97f;
+  Particles expected = p;
+  for (std::size_t i = 0; i < n; ++i) {
+    const float free = expected.w[i] > 0.0f ? 1.0f : 0.0f;
+    expected.vx[i] += free * (dt * g[0]), expected.vy[i] += free * (dt * g[1]);
+    expected.vz[i] += free * (dt * g[2]);
+    expected.px[i] = expected.x[i] + dt * expected.vx[i] + u(rng) * 1e-3f;  // + a "solve"
+    expected.py[i] = expected.y[i] + dt * expected.vy[i];
+    expected.pz[i] = expected.z[i] + dt * expected.vz[i];
+  }
+  predict_positions(p.view(), dt, g);
+  auto same = [&](const std::vector<float>& a, const std::vector<float>& b) {
+    return std::memcmp(a.data(), b.data(), n * sizeof(float)) == 0;
+  };
+  EXPECT_TRUE(same(p.vx, expected.vx) && same(p.vy, expected.vy) && same(p.vz, expected.vz));
+  EXPECT_TRUE(same(p.py, expected.py) && same(p.pz, expected.pz));
+  p.px = expected.px;
+  for (std::size_t i = 0; i < n; ++i) {
+    const float inv_dt = 1.0f / dt;
+    expected.vx[i] = (expected.px[i] - expected.x[i]) * inv_dt;
+    expected.vy[i] = (expected.py[i] - expected.y[i]) * inv_dt;
+    expected.vz[i] = (expected.pz[i] - expected.z[i]) * inv_dt;
+    expected.x[i] = expected.px[i], expected.y[i] = expected.py[i], expected.z[i] = expected.pz[i];
+    if (expected.w[i] > 0.0f) expected.vx[i] *= damping, expected.vy[i] *= damping, expected.vz[i] *= damping;
+  }
+  update_velocities(p.view(), dt);
+  damp_velocities(p.view(), damping);
+  EXPECT_TRUE(same(p.x, expected.x) && same(p.y, expected.y) && same(p.z, expected.z));
+  EXPECT_TRUE(same(p.vx, expected.vx) && same(p.vy, expected.vy) && same(p.vz, expected.vz));
 }
 
 // ---- Position Based Fluids ----------------------------------------------------------------------
@@ -500,6 +545,109 @@ TEST(Collisions, FrictionStopsSmallSlidingAndSlowsLargeSliding) {
     const float expected = slide <= 0.5f * 0.01f ? 0.0f : slide - 0.5f * 0.01f;
     EXPECT_NEAR(p.px[0], expected, 1e-6f) << "slide " << slide;
     EXPECT_NEAR(p.py[0], 0.0f, 1e-6f);
+  }
+}
+
+// The domain pass runs lane = particle with selects for the scalar branches: it must give every
+// particle the bits of the plain scalar formulas (this reference, the kernel as it was written
+// first), across mixed materials and radii, friction on and off, particles past several walls,
+// pinned, NaN and infinite coordinates, and a count that leaves a partial last batch.
+namespace domain_reference {
+
+struct Point {
+  float x, y, z;
+};
+void resolve_contact(Point& p, const Point& x, const float n[3], float depth, float mu) {
+  p.x += depth * n[0];
+  p.y += depth * n[1];
+  p.z += depth * n[2];
+  if (mu <= 0.0f) return;
+  const float dx = p.x - x.x, dy = p.y - x.y, dz = p.z - x.z;
+  const float dn = dx * n[0] + dy * n[1] + dz * n[2];
+  const float tx = dx - dn * n[0], ty = dy - dn * n[1], tz = dz - dn * n[2];
+  const float t_len = std::sqrt(tx * tx + ty * ty + tz * tz);
+  if (t_len <= 0.0f) return;
+  const float keep = t_len <= mu * depth ? 1.0f : mu * depth / t_len;
+  p.x -= keep * tx;
+  p.y -= keep * ty;
+  p.z -= keep * tz;
+}
+void collide_domain(Point& p, const Point& x, const CollisionParams& c, float r) {
+  float* pc[3] = {&p.x, &p.y, &p.z};
+  for (int axis = 0; axis < 3; ++axis) {
+    const float lo = c.domain_min[axis] + r;
+    const float hi = std::max(c.domain_max[axis] - r, lo);
+    float n[3] = {0, 0, 0};
+    const float v = *pc[axis];
+    if (v < lo) {
+      n[axis] = 1.0f;
+      resolve_contact(p, x, n, lo - v, c.domain_friction);
+      *pc[axis] = lo;
+    } else if (v > hi) {
+      n[axis] = -1.0f;
+      resolve_contact(p, x, n, v - hi, c.domain_friction);
+      *pc[axis] = hi;
+    }
+  }
+}
+float radius(std::uint32_t phase, const CollisionParams& c) {
+  switch (phase_material(phase)) {
+    case Material::Fluid: return c.fluid_radius;
+    case Material::Cloth: return c.cloth_radius[phase >> 8];
+    default: return 0.0f;
+  }
+}
+
+}  // namespace domain_reference
+
+TEST(Collisions, DomainPassMatchesTheScalarReferenceBitForBit) {
+  const std::size_t n = 9003;  // three tasks of the kernel's parallel loop, a partial last batch
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<float> pos(-0.3f, 1.3f), move(-0.4f, 0.4f), unit(0.0f, 1.0f);
+  std::uniform_int_distribution<int> run_length(1, 20), material(0, 3);
+  const float cloth_radius[2] = {0.02f, 0.6f};  // the second wider than half the domain
+  Particles p(n);
+  for (std::size_t i = 0; i < n;) {  // runs of one phase, so batches are uniform or mixed
+    const int m = material(rng);
+    const std::uint32_t phase = m == 0   ? make_phase(Material::Free)
+                                : m == 1 ? make_phase(Material::Fluid)
+                                         : make_phase(Material::Cloth, std::uint32_t(m - 2));
+    for (int k = run_length(rng); k > 0 && i < n; --k, ++i) {
+      p.set(i, pos(rng), pos(rng), pos(rng));
+      p.px[i] += move(rng), p.py[i] += move(rng), p.pz[i] += move(rng);
+      p.phase[i] = phase;
+      p.w[i] = unit(rng) < 0.05f ? 0.0f : 1.0f;
+    }
+  }
+  p.px[10] = std::nanf(""), p.py[11] = INFINITY, p.pz[12] = -INFINITY, p.px[13] = -0.0f;
+  p.x[14] = std::nanf("");
+  for (float mu : {0.0f, 0.4f}) {
+    CollisionParams params;
+    params.domain_friction = mu;
+    params.fluid_radius = 0.05f;
+    params.cloth_radius = cloth_radius;
+    Particles expected = p, got = p;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (expected.w[i] <= 0.0f) continue;
+      domain_reference::Point q{expected.px[i], expected.py[i], expected.pz[i]};
+      domain_reference::collide_domain(q, {expected.x[i], expected.y[i], expected.z[i]}, params,
+                                       domain_reference::radius(expected.phase[i], params));
+      expected.px[i] = q.x, expected.py[i] = q.y, expected.pz[i] = q.z;
+    }
+    solve_collisions(got.view(), params, {});
+    std::size_t moved = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const float e[3] = {expected.px[i], expected.py[i], expected.pz[i]};
+      const float g[3] = {got.px[i], got.py[i], got.pz[i]};
+      for (int a = 0; a < 3; ++a) {
+        const bool same = std::isnan(e[a]) ? std::isnan(g[a])
+                                           : std::memcmp(&e[a], &g[a], sizeof(float)) == 0;
+        ASSERT_TRUE(same) << "particle " << i << " axis " << a << " mu " << mu << ": " << g[a]
+                          << " instead of " << e[a];
+      }
+      moved += e[0] != p.px[i] || e[1] != p.py[i] || e[2] != p.pz[i];
+    }
+    EXPECT_GT(moved, n / 4) << "most contacts must be exercised";
   }
 }
 

@@ -1,3 +1,14 @@
+// Particle-shape collisions (the math is in collisions.hpp): for every free particle, each
+// collider of the scene, then the domain box (last: the domain always wins).
+//
+// Colliders (plane, box, sphere, capsule, SDF) run per particle in scalar code, and only when
+// the scene has colliders. The domain runs lane = particle over kLanes consecutive particles:
+// for each axis a in turn, the wall a particle is past (p_a < lo_a, or p_a > hi_a, with lo and
+// hi the domain shrunk by the particle's radius) has normal n = +-e_a and depth d; then
+//   p += d n,  friction on dx = p - x (as in collisions.hpp),  p_a = lo_a (hi_a) exactly.
+// Every branch of the scalar formulas is a select here and the arithmetic is the same operations
+// in the same order, so each particle gets the bits a scalar loop gives (kernel_tests.cpp checks
+// this against a scalar reference); a batch with no particle past a wall only compares.
 #include "seiche/kernels/collisions.hpp"
 
 #include <tbb/parallel_for.h>
@@ -6,10 +17,19 @@
 #include <cmath>
 
 #include "seiche/kernels/phase.hpp"
+#include "simd.hpp"
 
 namespace seiche::kernels {
 
 namespace {
+
+using simd::Floats;
+using simd::kLanes;
+using simd::Mask;
+using simd::Lanes;
+constexpr std::size_t kBatchesPerTask = 512;  // 4,096 particles with 8 lanes
+
+// ---- Colliders: scalar, per particle ------------------------------------------------------------
 
 struct Point {
   float x, y, z;
@@ -30,25 +50,6 @@ inline void resolve_contact(Point& p, const Point& x, const float n[3], float de
   p.x -= keep * tx;
   p.y -= keep * ty;
   p.z -= keep * tz;
-}
-
-inline void collide_domain(Point& p, const Point& x, const CollisionParams& c, float r) {
-  float* pc[3] = {&p.x, &p.y, &p.z};
-  for (int axis = 0; axis < 3; ++axis) {
-    const float lo = c.domain_min[axis] + r;
-    const float hi = std::max(c.domain_max[axis] - r, lo);
-    float n[3] = {0, 0, 0};
-    const float v = *pc[axis];
-    if (v < lo) {
-      n[axis] = 1.0f;
-      resolve_contact(p, x, n, lo - v, c.domain_friction);
-      *pc[axis] = lo;  // exact, whatever rounding the push did
-    } else if (v > hi) {
-      n[axis] = -1.0f;
-      resolve_contact(p, x, n, v - hi, c.domain_friction);
-      *pc[axis] = hi;
-    }  // a NaN fails both tests and stays NaN: the run's finite check must see it, not a wall
-  }
 }
 
 // Out of the ball of radius `reach` around c, along the line from c (up where p is at c).
@@ -127,23 +128,87 @@ inline float particle_radius(std::uint32_t phase, const CollisionParams& c) {
   }
 }
 
+void collide_shapes(const ParticleView& p, const CollisionParams& params,
+                    std::span<const CollisionShape> shapes, std::size_t begin, std::size_t end) {
+  for (std::size_t i = begin; i != end; ++i) {
+    if (p.w[i] <= 0.0f) continue;
+    const float r = particle_radius(p.phase[i], params);
+    Point q{p.px[i], p.py[i], p.pz[i]};
+    const Point x{p.x[i], p.y[i], p.z[i]};
+    for (const CollisionShape& s : shapes) collide_shape(q, x, s, r);
+    p.px[i] = q.x, p.py[i] = q.y, p.pz[i] = q.z;
+  }
+}
+
+// ---- The domain: lane = particle ----------------------------------------------------------------
+
+// particle_radius per lane: one compare when the lanes share a phase (materials and cloths are
+// stored in blocks), else lane by lane.
+Floats lane_radii(const Lanes& lanes, const std::uint32_t* phase, const CollisionParams& c) {
+  using Ints = xsimd::batch<std::uint32_t>;
+  const std::uint32_t first = phase[lanes.i];
+  if (lanes.full() && xsimd::all(Ints::load_unaligned(phase + lanes.i) == Ints(first)))
+    return Floats(particle_radius(first, c));
+  alignas(64) float t[kLanes];
+  for (std::size_t l = 0; l < kLanes; ++l)
+    t[l] = particle_radius(phase[lanes.i + std::min(l, lanes.active - 1)], c);
+  return Floats::load_aligned(t);
+}
+
+// The walls of axis a for every lane where `movable`: resolve_contact with n = +-e_a, as selects.
+SEICHE_INLINE inline void domain_axis(Floats p[3], const Floats x[3], int a, const Floats& lo,
+                                      const Floats& hi, float mu, const Mask& movable) {
+  const Floats v = p[a];
+  const Mask below = movable && (v < lo);
+  const Mask above = movable && (v > hi);  // never with below: hi >= lo (NaN: neither)
+  const Mask contact = below || above;
+  if (!xsimd::any(contact)) return;
+  const Floats depth = xsimd::select(below, lo - v, v - hi);
+  Floats n[3] = {Floats(0.0f), Floats(0.0f), Floats(0.0f)};
+  n[a] = xsimd::select(below, Floats(1.0f), Floats(-1.0f));
+  Floats q[3];
+  for (int k = 0; k < 3; ++k) q[k] = p[k] + depth * n[k];
+  if (!(mu <= 0.0f)) {
+    const Floats d[3] = {q[0] - x[0], q[1] - x[1], q[2] - x[2]};
+    const Floats dn = d[0] * n[0] + d[1] * n[1] + d[2] * n[2];
+    const Floats t[3] = {d[0] - dn * n[0], d[1] - dn * n[1], d[2] - dn * n[2]};
+    const Floats t_len = xsimd::sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
+    const Floats bound = Floats(mu) * depth;
+    const Floats keep = xsimd::select(t_len <= bound, Floats(1.0f), bound / t_len);
+    const Mask sticks = t_len <= Floats(0.0f);  // nothing to remove
+    for (int k = 0; k < 3; ++k) q[k] = xsimd::select(sticks, q[k], q[k] - keep * t[k]);
+  }
+  q[a] = xsimd::select(below, lo, hi);  // exact, whatever rounding the push did
+  for (int k = 0; k < 3; ++k) p[k] = xsimd::select(contact, q[k], p[k]);
+}
+
+SEICHE_INLINE inline void collide_domain(const ParticleView& v, const CollisionParams& c,
+                                         const Lanes& lanes) {
+  Floats p[3] = {lanes.load(v.px), lanes.load(v.py), lanes.load(v.pz)};
+  const Floats x[3] = {lanes.load(v.x), lanes.load(v.y), lanes.load(v.z)};
+  const Mask movable = !(lanes.load(v.w) <= Floats(0.0f));  // as the scalar `w <= 0: skip`
+  const Floats r = lane_radii(lanes, v.phase, c);
+  for (int a = 0; a < 3; ++a) {
+    const Floats lo = Floats(c.domain_min[a]) + r;
+    const Floats shrunk = Floats(c.domain_max[a]) - r;
+    const Floats hi = xsimd::select(shrunk < lo, lo, shrunk);  // std::max(shrunk, lo)
+    domain_axis(p, x, a, lo, hi, c.domain_friction, movable);
+  }
+  lanes.store(v.px, p[0]), lanes.store(v.py, p[1]), lanes.store(v.pz, p[2]);
+}
+
 }  // namespace
 
 void solve_collisions(const ParticleView& p, const CollisionParams& params,
                       std::span<const CollisionShape> shapes) {
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, p.n, 2048), [&](const auto& range) {
-    for (std::size_t i = range.begin(); i != range.end(); ++i) {
-      if (p.w[i] <= 0.0f) continue;
-      const float r = particle_radius(p.phase[i], params);
-      Point q{p.px[i], p.py[i], p.pz[i]};
-      const Point x{p.x[i], p.y[i], p.z[i]};
-      for (const CollisionShape& s : shapes) collide_shape(q, x, s, r);
-      collide_domain(q, x, params, r);  // last: the domain always wins
-      p.px[i] = q.x;
-      p.py[i] = q.y;
-      p.pz[i] = q.z;
-    }
-  });
+  const std::size_t batches = (p.n + kLanes - 1) / kLanes;
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, batches, kBatchesPerTask), [&](const auto& r) {
+        const std::size_t begin = r.begin() * kLanes, end = std::min(p.n, r.end() * kLanes);
+        if (!shapes.empty()) collide_shapes(p, params, shapes, begin, end);
+        for (std::size_t i = begin; i < end; i += kLanes)
+          collide_domain(p, params, Lanes{i, std::min(kLanes, end - i)});
+      });
 }
 
 }  // namespace seiche::kernels

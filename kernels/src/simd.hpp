@@ -171,4 +171,24 @@ inline void prefetch_lists(NeighborSpan nbr, std::size_t first, std::size_t last
   for (; a < b; a += 64) __builtin_prefetch(a);
 }
 
+/// kLanes consecutive particles from i, for streaming passes over SoA columns (lane = particle);
+/// a partial batch is staged through a buffer, its padding lanes repeating the last particle and
+/// never stored.
+struct Lanes {
+  std::size_t i = 0, active = 0;
+  bool full() const { return active == kLanes; }
+  Floats load(const float* column) const {
+    if (full()) return Floats::load_unaligned(column + i);
+    alignas(64) float t[kLanes];
+    for (std::size_t l = 0; l < kLanes; ++l) t[l] = column[i + std::min(l, active - 1)];
+    return Floats::load_aligned(t);
+  }
+  void store(float* column, const Floats& v) const {
+    if (full()) return v.store_unaligned(column + i);
+    alignas(64) float t[kLanes];
+    v.store_aligned(t);
+    for (std::size_t l = 0; l < active; ++l) column[i + l] = t[l];
+  }
+};
+
 }  // namespace seiche::kernels::simd
