@@ -359,6 +359,21 @@ TEST(CliBake, FailedFrameWriteIsExitCode3AndKeepsTheLastCompleteFrame) {
   expect_same_files(straight_bake(), dir);
 }
 
+TEST(Cli, FailedFrameWriteIsExitCode3AndKeepsTheFramesBefore) {
+  // Frame files are written in the background while the next frame is simulated: a failure
+  // still stops the run with the file's name, and every frame before it is on disk.
+  const fs::path dir = work_dir() / "run_failed_write";
+  fs::remove_all(dir);
+  fs::create_directories(dir / "particles.0003.ply" / "x");  // its rename fails, as on a full disk
+  const Result r = seiche("run " + q(write_scene("io.json", kValid)) + " --frames 6 --out " + q(dir));
+  EXPECT_EQ(r.code, 3) << r.err;
+  EXPECT_NE(r.err.find((dir / "particles.0003.ply").string()), std::string::npos) << r.err;
+  EXPECT_TRUE(fs::exists(dir / "particles.0001.ply"));
+  EXPECT_TRUE(fs::exists(dir / "particles.0002.ply"));
+  for (int f = 4; f <= 6; ++f) EXPECT_FALSE(fs::exists(dir / ("particles.000" + std::to_string(f) + ".ply"))) << f;
+  expect_no_temporary_files(dir);
+}
+
 TEST(CliBake, FileSizeLimitActsLikeAFullDisk) {
   const fs::path dir = fresh_dir("bake_full_disk");
   // ulimit -f (512-byte blocks in /bin/sh): 92 KB holds a frame's PLY (68 KB) but not the

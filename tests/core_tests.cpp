@@ -10,6 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "background_writer.hpp"
 #include "seiche/output_files.hpp"
 #include "seiche/particle_store.hpp"
 #include "seiche/runner.hpp"
@@ -252,6 +253,31 @@ TEST(Runner, NonFiniteStateStopsTheRun) {
   const nlohmann::json rep = nlohmann::json::parse(read_file(o.report));
   EXPECT_EQ(rep["status"], "error");
   EXPECT_GT(rep["frames"][0]["non_finite"].get<int>(), 0);
+}
+
+TEST(OutputFiles, BackgroundWriterWritesEveryFileInOrderAndStopsAtTheFirstFailure) {
+  const fs::path dir = fresh_dir("background_writer");
+  fs::create_directories(dir / "c.bin" / "x");  // a folder in the way: c.bin's rename fails
+  BackgroundWriter writer(1);
+  writer.submit(dir / "a.bin", "first");
+  writer.submit(dir / "b.bin", std::string(1 << 20, 'b'));
+  writer.finish();
+  EXPECT_EQ(read_file(dir / "a.bin"), "first");
+  EXPECT_EQ(read_file(dir / "b.bin").size(), std::size_t(1) << 20);
+  writer.submit(dir / "c.bin", "third");
+  try {
+    writer.submit(dir / "d.bin", "fourth");  // may or may not see c's failure yet
+    writer.submit(dir / "e.bin", "fifth");   // waits for room: c is done by then
+    writer.finish();
+    ADD_FAILURE() << "no IoError for c.bin";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find((dir / "c.bin").string()), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(writer.finish(), IoError);  // the failure stays in force
+  EXPECT_THROW(writer.submit(dir / "f.bin", "sixth"), IoError);
+  for (const char* later : {"d.bin", "e.bin", "f.bin"}) EXPECT_FALSE(fs::exists(dir / later)) << later;
+  for (const auto& e : fs::directory_iterator(dir))
+    EXPECT_FALSE(e.path().filename().string().ends_with(".tmp")) << e.path();
 }
 
 TEST(OutputFiles, UnwritableFolderIsAnIoError) {

@@ -10,6 +10,8 @@
 #include <unistd.h>
 
 #include <fmt/format.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 namespace seiche {
 
@@ -74,12 +76,14 @@ std::string encode_particles_ply(const ParticleStore& s) {
   out.resize(header + n * kRecord);
   char* dst = out.data() + header;
   static_assert(std::endian::native == std::endian::little, "PLY writer assumes little-endian");
-  for (std::size_t k = 0; k < n; ++k, dst += kRecord) {
-    const std::uint32_t i = index_of_id[k];
-    const float v[6] = {s.x[i], s.y[i], s.z[i], s.vx[i], s.vy[i], s.vz[i]};
-    std::memcpy(dst, v, sizeof(v));
-    std::memcpy(dst + sizeof(v), &s.id[i], sizeof(std::int32_t));
-  }
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 8192), [&](const auto& r) {
+    for (std::size_t k = r.begin(); k != r.end(); ++k) {
+      const std::uint32_t i = index_of_id[k];
+      const float v[6] = {s.x[i], s.y[i], s.z[i], s.vx[i], s.vy[i], s.vz[i]};
+      std::memcpy(dst + k * kRecord, v, sizeof(v));
+      std::memcpy(dst + k * kRecord + sizeof(v), &s.id[i], sizeof(std::int32_t));
+    }
+  });
   return out;
 }
 

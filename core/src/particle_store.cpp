@@ -1,6 +1,5 @@
 #include "seiche/particle_store.hpp"
 
-#include <cstring>
 #include <type_traits>
 
 #include <tbb/parallel_for.h>
@@ -34,40 +33,45 @@ void ParticleStore::enable_vorticity_columns() {
   omega_z.resize(size_);
 }
 
+template <class T>
+AlignedColumn<T>& ParticleStore::spare_column() {
+  if constexpr (std::is_same_v<T, float>) return spare_float_;
+  else if constexpr (std::is_same_v<T, std::uint32_t>) return spare_uint_;
+  else return spare_int_;
+}
+
 void ParticleStore::reorder(std::span<const std::uint32_t> order) {
   const std::size_t n = size_;
-  scratch_float_.resize(n);
-  scratch_int_.resize(n);
-  // Gather each column into a scratch buffer, then copy back: one column's worth of extra memory.
+  // Gather each column into the spare of its type, then swap the buffers (no copy back). Both
+  // have the same padded length and zero padding (the gather writes only [0, n)).
   for_each_state_column([&](auto& column) {
     using T = std::remove_reference_t<decltype(column[0])>;
-    T* src = column.data();
-    T* tmp;
-    if constexpr (std::is_same_v<T, float>) {
-      tmp = scratch_float_.data();
-    } else {  // int32 and uint32 may alias each other
-      tmp = reinterpret_cast<T*>(scratch_int_.data());
-    }
+    AlignedColumn<T>& spare = spare_column<T>();
+    spare.resize(n);
+    const T* src = column.data();
+    T* dst = spare.data();
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096),
                       [&](const tbb::blocked_range<std::size_t>& r) {
-                        for (std::size_t k = r.begin(); k != r.end(); ++k) tmp[k] = src[order[k]];
+                        for (std::size_t k = r.begin(); k != r.end(); ++k) dst[k] = src[order[k]];
                       });
-    std::memcpy(src, tmp, n * sizeof(T));
+    column.storage().swap(spare.storage());
   });
 }
 
 std::vector<std::uint32_t> ParticleStore::index_of_id() const {
   std::vector<std::uint32_t> index(size_);
-  for (std::size_t i = 0; i < size_; ++i) index[std::size_t(id[i])] = std::uint32_t(i);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, size_, 16384), [&](const auto& r) {
+    for (std::size_t i = r.begin(); i != r.end(); ++i) index[std::size_t(id[i])] = std::uint32_t(i);
+  });  // ids are distinct: no two writes meet
   return index;
 }
 
 std::size_t ParticleStore::bytes() const {
   std::size_t b = 0;
   for (const FloatColumn* c : {&x, &y, &z, &px, &py, &pz, &vx, &vy, &vz, &w, &density, &lambda,
-                               &omega_x, &omega_y, &omega_z})
+                               &omega_x, &omega_y, &omega_z, &spare_float_})
     b += c->bytes();
-  return b + phase.bytes() + id.bytes();
+  return b + phase.bytes() + id.bytes() + spare_uint_.bytes() + spare_int_.bytes();
 }
 
 std::vector<std::uint32_t> inverse_permutation(std::span<const std::uint32_t> order) {

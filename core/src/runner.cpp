@@ -8,6 +8,7 @@
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 
+#include "background_writer.hpp"
 #include "progress.hpp"
 #include "run_report.hpp"
 #include "seiche/cloth_obj_exporter.hpp"
@@ -51,6 +52,7 @@ RunResult run_scene(const SceneDef& scene, const RunOptions& options) {
     if (!options.report.empty()) write_file_atomically(options.report, report.dump());
   };
 
+  BackgroundWriter frame_files;  // PLY frames go to disk while the next frame is simulated
   const auto start = Clock::now();
   try {
     for (int f = 1; f <= frames; ++f) {
@@ -60,8 +62,8 @@ RunResult run_scene(const SceneDef& scene, const RunOptions& options) {
       result.metrics.push_back(m);
       throw_if_diverged(m, f);
       if (!options.out_dir.empty()) {
-        write_file_atomically(options.out_dir / frame_file_name("particles", f, "ply"),
-                              encode_particles_ply(sim.particles()));
+        frame_files.submit(options.out_dir / frame_file_name("particles", f, "ply"),
+                           encode_particles_ply(sim.particles()));
         if (cloth_obj) cloth_obj->write_frame({sim.particles(), scene, f, sim.time()}, options.out_dir);
       }
       result.frames = f;
@@ -70,8 +72,14 @@ RunResult run_scene(const SceneDef& scene, const RunOptions& options) {
       progress.frame_done(f, elapsed.count(), f,
                           fmt::format("{} particles  {:.1f} ms/frame", result.particles, frame_time.count() * 1e3));
     }
+    frame_files.finish();  // the last frames are on disk (or their failure is thrown) here
   } catch (const std::exception& e) {
     report.set_error(e.what());
+    try {
+      frame_files.finish();  // the frames before the failure are kept
+    } catch (const IoError&) {
+      // the first error is the one to tell
+    }
     try {
       write_report();
     } catch (const IoError&) {

@@ -117,6 +117,19 @@ inline WallSum<Floats> domain_walls(const PbfParams& prm, const Gathered4& p) {
       prm, p.x, p.y, p.z, [](const Floats& a, const Floats& b) { return xsimd::max(a, b); },
       [](const Floats& a, const Floats& b) { return xsimd::min(a, b); });
 }
+// Whether any lane of the group is within h of a wall. If none is, every wall term is exactly 0
+// (u = 1 in wall_term: fraction and slope are 0), so the group skips them: in a large domain
+// most groups do. The test uses wall_term's own arithmetic for u, so skipping changes no bit.
+SEICHE_INLINE inline bool near_a_wall(const PbfParams& prm, const Gathered4& p) {
+  const Floats inv_h(1.0f / prm.h), one(1.0f);
+  const Floats* c[3] = {&p.x, &p.y, &p.z};
+  Mask near(false);
+  for (int a = 0; a < 3; ++a) {
+    near = near | ((*c[a] - Floats(prm.wall_min[a])) * inv_h < one);
+    near = near | ((Floats(prm.wall_max[a]) - *c[a]) * inv_h < one);
+  }
+  return xsimd::any(near);
+}
 inline WallSum<float> domain_walls(const PbfParams& prm, const Float4& p) {
   return domain_walls<float>(
       prm, p.x, p.y, p.z, [](float a, float b) { return std::max(a, b); },
@@ -194,7 +207,7 @@ void pbf_density_lambda(const Float4* pos, NeighborSpan nbr, std::size_t n, cons
       });
       Floats rho = Floats(rho_scale) * (Floats(self_s3) + w_sum);
       Floats sx = Floats(grad_scale) * gx, sy = Floats(grad_scale) * gy, sz = Floats(grad_scale) * gz;
-      if (prm.walls) {
+      if (prm.walls && near_a_wall(prm, pi)) {
         const WallSum<Floats> wall = domain_walls(prm, pi);
         rho += Floats(prm.rest_density) * wall.fraction;
         sx += wall.gx, sy += wall.gy, sz += wall.gz;
@@ -240,7 +253,7 @@ void apply_correction(const Float4* pos_lambda, NeighborSpan nbr, std::size_t n,
         accumulate(sz, f, q.dz);
       });
       sx *= Floats(grad_scale), sy *= Floats(grad_scale), sz *= Floats(grad_scale);
-      if (prm.walls) {  // lambda_i f'(d) n: the wall's part of the particle's own constraint
+      if (prm.walls && near_a_wall(prm, pi)) {  // lambda_i f'(d) n: the wall's part of the particle's own constraint
         const WallSum<Floats> wall = domain_walls(prm, pi);
         const Floats push = pi.w;
         sx += push * wall.gx, sy += push * wall.gy, sz += push * wall.gz;

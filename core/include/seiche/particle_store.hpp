@@ -51,7 +51,7 @@ class ParticleStore {
   /// permutation of [0, size()); exports and checkpoints use this to go back to id order.
   std::vector<std::uint32_t> index_of_id() const;
 
-  /// Bytes held by all columns.
+  /// Bytes held by all columns (the reorder spares included).
   std::size_t bytes() const;
 
  private:
@@ -59,8 +59,13 @@ class ParticleStore {
   void for_each_state_column(F&& f);
   std::size_t size_ = 0;
   bool fluid_columns_ = false, vorticity_columns_ = false;
-  std::vector<float> scratch_float_;         // reorder buffers, reused
-  std::vector<std::uint32_t> scratch_int_;
+  // reorder() gathers a column into the spare of its type and swaps the two buffers, so the
+  // spares hold the old order afterwards (their contents mean nothing between calls).
+  FloatColumn spare_float_;
+  AlignedColumn<std::uint32_t> spare_uint_;
+  AlignedColumn<std::int32_t> spare_int_;
+  template <class T>
+  AlignedColumn<T>& spare_column();
 };
 
 /// new_index[old] for a sorted[k] = old[order[k]] permutation.
