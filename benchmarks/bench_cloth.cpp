@@ -92,7 +92,7 @@ void BM_ClothSheetStep(benchmark::State& state) {
 }  // namespace
 
 // forests 0: the anchor's set-up, the same constraints (edges and hinges) solved once per
-// substep. forests 1: the scene default, which adds a direct solve along one spanning forest of
+// substep. forests 1: the default for this pinned sheet, which adds a direct solve along one spanning forest of
 // the edges per iteration (cloth_solver.hpp, kernels/distance_tree.hpp).
 BENCHMARK(BM_ClothSheetStep)
     ->ArgNames({"n", "threads", "self", "forests"})

@@ -8,6 +8,7 @@
 #include <bit>
 #include <cerrno>
 #include <cstring>
+#include <span>
 #include <fstream>
 #include <sstream>
 #include <vector>
@@ -21,7 +22,7 @@ namespace {
 static_assert(std::endian::native == std::endian::little, "checkpoints are written little-endian");
 
 constexpr char kMagic[8] = {'S', 'E', 'I', 'C', 'H', 'E', 'C', 'P'};
-constexpr std::uint32_t kFormatVersion = 1;
+constexpr std::uint32_t kFormatVersion = 2;
 constexpr std::uint32_t kColumnCount = 12;  // x y z px py pz vx vy vz w phase id
 constexpr std::size_t kPreambleBytes = sizeof(kMagic) + 4 + 8 + 8;
 
@@ -101,6 +102,9 @@ std::string encode_checkpoint(const Simulation& sim, std::uint64_t scene_fingerp
     put_column(body, *c, n);
   put_column(body, s.phase, n);
   put_column(body, s.id, n);
+  const std::span<const float> multipliers = sim.cloth_stretch_multipliers();
+  put(body, std::uint64_t(multipliers.size()));
+  for (float v : multipliers) put(body, v);
 
   std::string file;
   file.reserve(kPreambleBytes + body.size());
@@ -150,7 +154,7 @@ Checkpoint read_checkpoint(const std::filesystem::path& file) {
   if (columns != kColumnCount)
     r.corrupt(fmt::format("{} columns, expected {}", columns, kColumnCount));
   constexpr std::size_t kBytesPerParticle = kColumnCount * 4;
-  if (n > r.remaining() / kBytesPerParticle || n * kBytesPerParticle != r.remaining())
+  if (n > r.remaining() / kBytesPerParticle || n * kBytesPerParticle + 8 > r.remaining())
     r.corrupt(fmt::format("{} particles need {} bytes of columns, the file holds {}", n,
                           n * kBytesPerParticle, r.remaining()));
   ParticleStore& s = cp.state;
@@ -161,6 +165,11 @@ Checkpoint read_checkpoint(const std::filesystem::path& file) {
     r.get_column(*c, n, names[k++]);
   r.get_column(s.phase, n, "phase");
   r.get_column(s.id, n, "id");
+  const auto m = r.get<std::uint64_t>("the multiplier count");
+  if (m > r.remaining() / 4 || m * 4 != r.remaining())
+    r.corrupt(fmt::format("{} multipliers need {} bytes, the file holds {}", m, m * 4, r.remaining()));
+  cp.stretch_multipliers.resize(m);
+  for (float& v : cp.stretch_multipliers) v = r.get<float>("a multiplier");
   std::vector<bool> seen(n, false);
   for (std::size_t i = 0; i < n; ++i) {
     const std::int32_t id = s.id[i];
@@ -187,7 +196,11 @@ void restore_checkpoint(Simulation& sim, const Checkpoint& cp, std::uint64_t sce
   if (cp.state.size() != sim.particles().size())
     throw ResumeError(fmt::format("{}: the checkpoint holds {} particles, the scene has {}",
                                   file.string(), cp.state.size(), sim.particles().size()));
+  if (cp.stretch_multipliers.size() != sim.cloth_stretch_multipliers().size())
+    throw ResumeError(fmt::format("{}: the checkpoint holds {} cloth multipliers, the scene has {}", file.string(),
+                                  cp.stretch_multipliers.size(), sim.cloth_stretch_multipliers().size()));
   sim.restore_state(cp.state, cp.frame);
+  sim.restore_cloth_stretch_multipliers(cp.stretch_multipliers);
 }
 
 }  // namespace seiche

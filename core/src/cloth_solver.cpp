@@ -177,8 +177,11 @@ void ClothSolver::create(ParticleStore& store, std::size_t first, const kernels:
     if (def.tethers) build_tethers(c, base, pinned);
     // Forests of the edges, each over the edges the previous ones left (kernels/distance_tree.hpp).
     std::vector<std::uint8_t> used(topo.edges.size(), 0);
-    if (raw_forests.size() < std::size_t(def.stretch_forests)) raw_forests.resize(std::size_t(def.stretch_forests));
-    for (int k = 0; k < def.stretch_forests; ++k)
+    // By default (ClothDef::kPinForest) one forest for a cloth with pins, none without.
+    const bool has_pins = std::find(pinned.begin(), pinned.end(), std::uint8_t(1)) != pinned.end();
+    const int forests = def.stretch_forests == ClothDef::kPinForest ? (has_pins ? 1 : 0) : def.stretch_forests;
+    if (raw_forests.size() < std::size_t(forests)) raw_forests.resize(std::size_t(forests));
+    for (int k = 0; k < forests; ++k)
       grow_shortest_path_forest(shapes_[c], base, pinned, edge_i.size() - topo.edges.size(), used,
                                 raw_forests[std::size_t(k)]);
     base += n;
@@ -266,6 +269,15 @@ void ClothSolver::begin_substep() {
 void ClothSolver::solve_stretch(const kernels::ParticleView& p, float dt) {
   for (kernels::DistanceForest& f : forests_) kernels::solve_distance_forest(p, stretch_, f, dt, tension_.data());
   kernels::solve_distance_constraints(p, stretch_, dt);
+}
+
+std::span<const float> ClothSolver::forest_tension() const {
+  return forests_.empty() ? std::span<const float>() : std::span<const float>(stretch_.lambda);
+}
+
+void ClothSolver::restore_forest_tension(std::span<const float> saved) {
+  if (forests_.empty() || saved.size() != stretch_.lambda.size()) return;
+  std::copy(saved.begin(), saved.end(), stretch_.lambda.begin());
 }
 
 void ClothSolver::solve_bending(const kernels::ParticleView& p, float dt) {

@@ -356,6 +356,14 @@ void Simulation::restore_state(const ParticleStore& saved, int frames_done) {
   time_ = frame_ * scene_.solver.frame_dt;
 }
 
+std::span<const float> Simulation::cloth_stretch_multipliers() const {
+  return cloth_ ? cloth_->forest_tension() : std::span<const float>();
+}
+
+void Simulation::restore_cloth_stretch_multipliers(std::span<const float> saved) {
+  if (cloth_) cloth_->restore_forest_tension(saved);
+}
+
 FrameMetrics Simulation::state_metrics() const {
   FrameMetrics m;
   m.frame = frame_;

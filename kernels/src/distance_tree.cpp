@@ -1,25 +1,34 @@
 // Exact projection of a forest of distance constraints (distance_tree.hpp has the math). Per
-// tree, three sweeps over its positions in a 16-float scratch record each:
+// tree, sweeps over its positions in a scratch record each:
 //   forward   gather x, the parent edge's n and b, K = M I + geometric stiffness, r = 0
 //   backward  (leaves to root) invert K, eliminate the vertex into its parent: d, s
-//   forward   dlambda and dx from the parent's dx; write p and lambda
+//   forward   dlambda and dx from the parent's dx, the merit's parts (not applied yet)
+//   forward   (once per trial step, usually once) the merit's penalty at x + beta dx
+//   forward   write p and lambda, scaled by the accepted beta
 // Trees are independent (disjoint particles and edges): they run in parallel, each serially.
 #include "seiche/kernels/distance_tree.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace seiche::kernels {
 
 namespace {
 
-// Scratch record of a position: K (then K^-1) as xx xy xz yy yz zz; r (then dx); n; x (then
-// 1 / d and the vertex's inverse mass); b (then s).
+// Scratch record of a position (kStride floats). K: 3 x 3 as xx xy xz yy yz zz, then
+// K^-1, then x0 (0..2) and the trial position y (3..5) of the line search; r, then dx; n of the
+// parent edge; x during the first sweep, then the parent edge's 1 / d, s and dlambda; b of the
+// parent edge.
 constexpr std::size_t kStride = 16;
-enum : std::size_t { kK = 0, kR = 6, kN = 9, kX = 12, kInvD = 12, kW = 13, kB = 15, kS = 15 };
+enum : std::size_t { kK = 0, kX0 = 0, kY = 3, kR = 6, kN = 9, kX = 12, kInvD = 12, kS = 13, kDl = 14, kB = 15 };
 constexpr float kMinLength = 1e-9f;
+// The line search (distance_tree.hpp): at most kHalvings halvings of the step, and a step must
+// realize kArmijo of the merit's first-order decrease.
+constexpr int kHalvings = 4;
+constexpr double kArmijo = 0.1;
 
 // In-place inverse of a symmetric positive definite 3 x 3 matrix (cofactors / determinant). K
 // is M I plus positive semidefinite terms with M > 0, so det >= M^3 > 0; guarded all the same.
@@ -45,6 +54,27 @@ inline void add_transverse(float* K, float k, const float* n) {
   K[3] += k - k * n[1] * n[1], K[4] -= k * n[1] * n[2], K[5] += k - k * n[2] * n[2];
 }
 
+// The penalty part of the merit at step length beta, the sum over the tree's edges of
+//   |dlambda_e| |C_e(x0 + beta dx) + alpha~_e (lambda_e + beta dlambda_e)|,
+// in position order, in double. Leaves y = x0 + beta dx in each record.
+double merit_penalty(const DistanceConstraints& c, DistanceForest& f, std::size_t begin, std::size_t end,
+                     float beta, float inv_dt2) {
+  float* const s = f.scratch.data();
+  double sum = 0.0;
+  for (std::size_t i = begin; i < end; ++i) {
+    float* v = s + i * kStride;
+    for (std::size_t a = 0; a < 3; ++a) v[kY + a] = v[kX0 + a] + beta * v[kR + a];
+    if (f.parent[i] == DistanceForest::kRoot || v[kDl] == 0.0f) continue;
+    const float* q = s + std::size_t(f.parent[i]) * kStride;
+    const float dx = v[kY] - q[kY], dy = v[kY + 1] - q[kY + 1], dz = v[kY + 2] - q[kY + 2];
+    const std::uint32_t e = f.edge[i];
+    const float residual = std::sqrt(dx * dx + dy * dy + dz * dz) - c.rest_length[e] +
+                           c.compliance[e] * inv_dt2 * (c.lambda[e] + beta * v[kDl]);
+    sum += double(std::abs(v[kDl])) * double(std::abs(residual));
+  }
+  return sum;
+}
+
 void solve_tree(const ParticleView& p, DistanceConstraints& c, DistanceForest& f, std::size_t begin,
                 std::size_t end, float inv_dt2, const float* tension) {
   float* const s = f.scratch.data();
@@ -52,6 +82,7 @@ void solve_tree(const ParticleView& p, DistanceConstraints& c, DistanceForest& f
   const std::uint32_t* const edge = f.edge.data();
   const std::uint32_t* const particle = f.particle.data();
 
+  // Forward: x, n and b of the parent edge, K = M I + geometric stiffness, r = 0.
   for (std::size_t i = begin; i < end; ++i) {
     float* v = s + i * kStride;
     const std::uint32_t a = particle[i];
@@ -74,28 +105,28 @@ void solve_tree(const ParticleView& p, DistanceConstraints& c, DistanceForest& f
     v[kB] = -(len - c.rest_length[e]) - c.compliance[e] * inv_dt2 * c.lambda[e];
     const float t = tension ? -tension[e] : 0.0f;
     if (t > 0.0f) {
-      const float k = t * inv_len;
+      // Capped at gamma times the lighter free end's mass.
+      const float wq = p.w[particle[parent[i]]];
+      const float lighter = std::min(m > 0.0f ? m : INFINITY, wq > 0.0f ? 1.0f / wq : INFINITY);
+      const float k = std::isfinite(lighter) ? std::min(t * inv_len, kGeometricStiffnessCap * lighter) : 0.0f;
       add_transverse(v + kK, k, n);
       add_transverse(q + kK, k, n);
     }
   }
 
+  // Backward: eliminate each vertex into its parent.
   for (std::size_t i = end; i-- > begin;) {
     float* v = s + i * kStride;
-    const float w = p.w[particle[i]];
-    const bool free = w > 0.0f;
+    const bool free = p.w[particle[i]] > 0.0f;
     if (free) invert_spd(v + kK);
-    v[kInvD] = 0.0f, v[kW] = w, v[kS] = v[kB];
+    v[kInvD] = 0.0f, v[kS] = 0.0f, v[kDl] = 0.0f;
     if (parent[i] == DistanceForest::kRoot) continue;
     const float* n = v + kN;
     float u[3] = {0.0f, 0.0f, 0.0f};
     if (free) mul_sym(v + kK, n, u);
     const float d = n[0] * u[0] + n[1] * u[1] + n[2] * u[2] + c.compliance[edge[i]] * inv_dt2;
     // Skipped (d = 0): coincident ends (n = 0), or a rigid edge to a fixed vertex.
-    if (!(d > 0.0f)) {
-      v[kS] = 0.0f;
-      continue;
-    }
+    if (!(d > 0.0f)) continue;
     const float inv_d = 1.0f / d;
     const float se = (v[kB] - (u[0] * v[kR] + u[1] * v[kR + 1] + u[2] * v[kR + 2])) * inv_d;
     v[kInvD] = inv_d, v[kS] = se;
@@ -106,23 +137,47 @@ void solve_tree(const ParticleView& p, DistanceConstraints& c, DistanceForest& f
     q[kR] -= n[0] * se, q[kR + 1] -= n[1] * se, q[kR + 2] -= n[2] * se;
   }
 
+  // Forward: the Newton step (dx, dlambda), not applied yet; K's slots take x0. Along the way
+  // the merit's quadratic part and its first-order decrease.
+  double quadratic = 0.0, decrease = 0.0;
   for (std::size_t i = begin; i < end; ++i) {
     float* v = s + i * kStride;
+    const std::uint32_t a = particle[i];
+    const float w = p.w[a];
     float rhs[3] = {v[kR], v[kR + 1], v[kR + 2]};
     if (parent[i] != DistanceForest::kRoot && v[kInvD] > 0.0f) {
       const float* q = s + std::size_t(parent[i]) * kStride;
       const float* n = v + kN;
       const float dlambda = v[kS] + (n[0] * q[kR] + n[1] * q[kR + 1] + n[2] * q[kR + 2]) * v[kInvD];
-      c.lambda[edge[i]] += dlambda;
+      v[kDl] = dlambda;
       rhs[0] += n[0] * dlambda, rhs[1] += n[1] * dlambda, rhs[2] += n[2] * dlambda;
+      quadratic += double(c.compliance[edge[i]] * inv_dt2) * double(dlambda) * double(dlambda);
+      decrease += double(std::abs(dlambda)) * double(std::abs(v[kB]));
     }
     float dx[3] = {0.0f, 0.0f, 0.0f};
-    if (v[kW] > 0.0f) {
+    if (w > 0.0f) {
       mul_sym(v + kK, rhs, dx);
-      const std::uint32_t a = particle[i];
-      p.px[a] += dx[0], p.py[a] += dx[1], p.pz[a] += dx[2];
+      quadratic += (double(dx[0]) * dx[0] + double(dx[1]) * dx[1] + double(dx[2]) * dx[2]) / double(w);
     }
     v[kR] = dx[0], v[kR + 1] = dx[1], v[kR + 2] = dx[2];
+    v[kX0] = p.px[a], v[kX0 + 1] = p.py[a], v[kX0 + 2] = p.pz[a];
+  }
+
+  // Backtracking (distance_tree.hpp, safeguard 2): phi(0) = decrease = -phi'(0).
+  if (!(decrease > 0.0)) return;  // the tree's edges are satisfied (b = 0) or cannot move
+  float beta = 1.0f;
+  for (int k = 0;; ++k) {
+    const double phi = 0.5 * double(beta) * double(beta) * quadratic + merit_penalty(c, f, begin, end, beta, inv_dt2);
+    if (phi <= decrease * (1.0 - kArmijo * double(beta))) break;
+    if (k == kHalvings) return;  // no step along this direction helps: the tree stays as it is
+    beta *= 0.5f;
+  }
+  // Apply beta (dx, dlambda).
+  for (std::size_t i = begin; i < end; ++i) {
+    const float* v = s + i * kStride;
+    const std::uint32_t a = particle[i];
+    if (parent[i] != DistanceForest::kRoot) c.lambda[edge[i]] += beta * v[kDl];
+    if (p.w[a] > 0.0f) p.px[a] = v[kY], p.py[a] = v[kY + 1], p.pz[a] = v[kY + 2];
   }
 }
 

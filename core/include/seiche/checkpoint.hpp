@@ -5,10 +5,11 @@
 // order, since the neighbor search's sort is stable (its result depends on the input order) and
 // the solvers sum in index order. Everything else is either rebuilt from the scene (constraints,
 // rest lengths, particle mass, the grid) or recomputed every substep (neighbor lists, density,
-// lambda, vorticity). Restoring builds a fresh Simulation from the same scene, reorders it into
+// lambda, vorticity), except the cloth stretch multipliers of the last substep, which the
+// stretch forests' geometric stiffness reads in the next one (kernels/distance_tree.hpp). Restoring builds a fresh Simulation from the same scene, reorders it into
 // the saved order (which remaps every index held elsewhere) and overwrites the state columns.
 //
-// File layout (little-endian), format version 1:
+// File layout (little-endian), format version 2:
 //   char[8]  magic "SEICHECP"
 //   u32      format version
 //   u64      body size in bytes (everything after the checksum)
@@ -21,6 +22,8 @@
 //     u64           particle count n
 //     u32           column count (12), then the columns, n values each, in this order:
 //                   x y z px py pz vx vy vz w (f32), phase (u32), id (i32)
+//     u64           m, then m f32: the cloth stretch multipliers of the last substep, in the
+//                   constraints' (scene-determined) order; m = 0 without stretch forests
 // A truncated file fails the size check, a flipped bit the checksum: either way the reader says
 // which file and what is wrong, and nothing is restored.
 #pragma once
@@ -30,6 +33,7 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "seiche/particle_store.hpp"
 
@@ -51,6 +55,7 @@ struct Checkpoint {
   int frame = 0;
   double time = 0.0;
   ParticleStore state;  ///< every state column, in the saved (cell) order
+  std::vector<float> stretch_multipliers;  ///< the cloth stretch forests' tension (may be empty)
 };
 
 /// FNV-1a 64-bit hash: the checksum of checkpoints and the scene fingerprint.

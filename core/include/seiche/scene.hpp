@@ -118,9 +118,11 @@ struct ClothDef {
   bool tethers = false;             ///< long-range attachments to the pinned vertices
   /// Spanning forests of the edges (0..3) whose stretch constraints are solved exactly, in linear
   /// time, every iteration before the Gauss-Seidel sweep: the first grows from the pins and
-  /// carries the cloth's weight to them; each further one takes edges the others left. Off by
-  /// default: at 1 substep per 1/24 s frame the linearized step gains energy (stability tests).
-  int stretch_forests = 0;
+  /// carries the cloth's weight to them; each further one takes edges the others left.
+  /// kPinForest (the default, the key absent): 1 for a cloth with pins (`pins` or a `pin_box`
+  /// that holds a vertex), 0 (Gauss-Seidel only, no cost) otherwise.
+  static constexpr int kPinForest = -1;
+  int stretch_forests = kPinForest;
   bool self_collision = false;      ///< particle contacts between non-adjacent vertices
   float friction = 0.3f;            ///< Coulomb friction of the cloth's contacts (>= 0)
   std::vector<int> pins;            ///< vertex indices pinned (mass 0)

@@ -83,6 +83,10 @@ class Simulation {
   /// elsewhere, as the neighbor stage does), then overwrites the state columns and the frame
   /// count, so that stepping on is bit-identical to never having stopped.
   void restore_state(const ParticleStore& saved, int frames_done);
+  /// The cloth stretch multipliers of the last substep, which the stretch forests read in the
+  /// next one (empty without forests), and their restoring from a checkpoint (same size).
+  std::span<const float> cloth_stretch_multipliers() const;
+  void restore_cloth_stretch_multipliers(std::span<const float> saved);
 
  private:
   struct Pass {

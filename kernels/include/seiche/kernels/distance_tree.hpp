@@ -20,8 +20,28 @@
 // load across a taut chain (a flat sheet under gravity) would swing it far in one step. As in
 // Andrews, Teichmann and Kry 2017 ("Geometric stiffness for real-time constrained multibody
 // dynamics"), K gets the diagonal blocks of the geometric stiffness of each forest edge,
-//   K_v = M_v I + sum_{edges e at v} (T_e / l_e) (I - n_e n_e^T),   T_e = max(0, -tension_e),
+//   K_v = M_v I + G_v,   G_v = sum_{edges e at v} k_e (I - n_e n_e^T),
+//   k_e = min(T_e / l_e, gamma min(M_i, M_j)),   T_e = max(0, -tension_e),
 // where tension_e is the edge's multiplier of the previous substep (XPBD units, force dt^2).
+//
+// Safeguards (the step must not make things worse; issue 3):
+// 1. Metric. With K != M the step is a projection in the metric K, not M: the lumped G acts as
+//    extra transverse mass in the solve that the velocity update does not see, and at large
+//    substeps that turns into energy (+13 % in 10 frames at one substep and iteration per
+//    1/24 s, 16 x 16 sheet). The cap gamma = 4 (k_e at most gamma times the lighter free end's
+//    mass) bounds the distortion, M_v <= K_v <= (1 + gamma deg_v) M_v. It binds where
+//    T_e / (l_e M) > gamma, i.e. where the tension alone would move the lighter end sideways by
+//    more than gamma edge lengths within the substep: there a linearized rotation means little.
+// 2. Line search. The step (dx, dlambda) of each tree is scaled by the first beta of
+//    1, 1/2, ..., 1/16 that decreases the l1 merit of the tree's part of the substep's problem
+//      phi(beta) = beta^2/2 (sum_v M_v |dx_v|^2 + sum_e alpha~_e dlambda_e^2)
+//                  + sum_e |dlambda_e| |C_e(x + beta dx) + alpha~_e (lambda_e + beta dlambda_e)|
+//    enough (Armijo: phi(beta) <= phi(0) + 0.1 beta phi'(0), phi(0) = -phi'(0) = sum |dlambda||b|:
+//    the step zeroes the linearized residual, and the inertia term has slope 0 at x). For linear
+//    constraints beta = 1 passes (M dx . dx <= sum |dlambda||b|); where the linearization is
+//    invalid (an edge turned far within one step, whose length then grows as its transverse
+//    move squared) the step is shortened; a tree along which no step decreases phi is left as
+//    it is. Deterministic: one tree, one serial loop, sums in position order.
 // This changes the path of the Newton step, not its fixed point: the multipliers are the
 // constraints' own (shared with the colored solve), so C + alpha~ lambda = 0, and with it the
 // compliance, does not depend on the solve order or the number of iterations.
@@ -59,10 +79,14 @@ DistanceForest make_distance_forest(std::span<const std::uint32_t> particle,
                                     std::span<const std::uint32_t> parent,
                                     std::span<const std::uint32_t> edge);
 
+/// The cap gamma of the geometric stiffness (above): at most this many times the lighter end's mass.
+inline constexpr float kGeometricStiffnessCap = 4.0f;
+
 /// One exact, linearized XPBD projection of the forest's edges (one iteration), with their
 /// rest lengths, compliances and multipliers from `c`; tension[k] (nullable) is constraint k's
-/// multiplier of the previous substep, for the geometric stiffness. Trees run in parallel, each
-/// serially: the result does not depend on the thread count.
+/// multiplier of the previous substep, for the geometric stiffness. Each tree's step is
+/// line-searched (safeguard 2). Trees run in parallel, each serially: the result does not depend
+/// on the thread count.
 void solve_distance_forest(const ParticleView& p, DistanceConstraints& c, DistanceForest& f, float dt,
                            const float* tension);
 
