@@ -18,7 +18,9 @@
 #include <span>
 #include <vector>
 
+#include "seiche/kernels/packed_positions.hpp"
 #include "seiche/kernels/particle_view.hpp"
+#include "seiche/kernels/xpbd_multipliers.hpp"
 
 namespace seiche::kernels {
 
@@ -43,7 +45,11 @@ std::vector<std::uint32_t> color_distance_constraints(std::span<const std::uint3
                                                       std::size_t particle_count,
                                                       DistanceConstraints& out);
 
-/// One XPBD iteration over every constraint (all colors).
+/// One XPBD iteration over every constraint (all colors), on positions packed by the caller
+/// (their range must cover every index of c).
+void solve_distance_constraints(const PackedPositions& packed, DistanceConstraints& c, float dt,
+                                Multipliers start);
+/// The same on the store's columns (packs and unpacks the constraints' range), accumulating lambda.
 void solve_distance_constraints(const ParticleView& p, DistanceConstraints& c, float dt);
 
 /// |C| / d per constraint (|C| in metres where d = 0), evaluated at positions x, y, z.
