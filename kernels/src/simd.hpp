@@ -28,6 +28,16 @@ using Floats = xsimd::batch<float>;
 using Mask = xsimd::batch_bool<float>;
 inline constexpr std::size_t kLanes = Floats::size;
 
+/// Hides where v comes from from the optimizer (an empty asm that "may change" it), so that it
+/// neither reuses values computed from it earlier nor keeps them live: for addresses that are
+/// cheaper to recompute than to keep in registers across a long computation.
+template <class T>
+SEICHE_INLINE inline void opaque(T& v) {
+#if defined(__GNUC__)
+  asm("" : "+r"(v));
+#endif
+}
+
 /// The four components of kLanes Float4 records, transposed into four batches (lane l holds
 /// records[index(l)]). One 16-byte load per record and a register transpose: xsimd 8's gather
 /// is a scalar loop, and hardware gathers are slower than this on AVX2 anyway.
