@@ -1,4 +1,5 @@
-// Small xsimd helpers shared by the neighbor-pass kernels (internal to kernels/).
+// Small xsimd helpers shared by the kernels (internal to kernels/): 16-byte record gathers and
+// scatters (neighbor passes, colored constraint solves, packing) and the neighbor-pass loops.
 //
 // The neighbor passes run lane = particle: a batch holds kLanes consecutive particles (a
 // NeighborGroup), and slot k of the loop processes the k-th neighbor of each of them. The

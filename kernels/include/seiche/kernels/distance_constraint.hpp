@@ -30,7 +30,8 @@ struct DistanceConstraints {
   std::vector<std::uint32_t> i, j;
   std::vector<float> rest_length;  ///< m
   std::vector<float> compliance;   ///< m/N
-  std::vector<float> lambda;       ///< accumulated multiplier, reset every substep
+  std::vector<float> lambda;       ///< accumulated multiplier, from 0 every substep (a reset, or
+                                   ///< the substep's first solve with Multipliers::Restart)
   std::vector<std::uint32_t> color_start;
 
   std::size_t size() const { return i.size(); }
