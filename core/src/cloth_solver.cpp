@@ -199,6 +199,13 @@ void ClothSolver::create(ParticleStore& store, std::size_t first, const kernels:
   if (!bend_dihedral.empty()) kernels::build_dihedral_bending(hinge_dihedral, bend_dihedral, view, dihedral_);
   if (!bend_isometric.empty())
     kernels::build_isometric_bending(hinge_isometric, bend_isometric, view, isometric_);
+  reset_packed_range();
+}
+
+void ClothSolver::reset_packed_range() {
+  const kernels::Hinges& iso = isometric_.hinges;
+  packed_.reset(kernels::index_range({stretch_.i, stretch_.j, dihedral_.a, dihedral_.b, dihedral_.c,
+                                      dihedral_.d, iso.a, iso.b, iso.c, iso.d}));
 }
 
 // Each free vertex is tied to its kTethersPerVertex nearest pinned vertices of the same cloth, at
@@ -257,18 +264,28 @@ bool ClothSolver::adjacent(std::size_t c, std::uint32_t u, std::uint32_t v) cons
   return std::binary_search(begin, end, v);
 }
 
+// XPBD starts every substep's multipliers at 0. The colored solves do that in the substep's first
+// iteration (kernels::Multipliers::Restart), so nothing is reset here, except for the forests:
+// they solve the edges first, from their multipliers at 0, and their geometric stiffness uses the
+// multipliers of the substep before.
 void ClothSolver::begin_substep() {
-  // The forests' geometric stiffness uses the multipliers of the substep before.
-  if (!forests_.empty()) tension_.swap(stretch_.lambda), stretch_.lambda.resize(tension_.size());
-  std::fill(stretch_.lambda.begin(), stretch_.lambda.end(), 0.0f);
-  std::fill(dihedral_.lambda.begin(), dihedral_.lambda.end(), 0.0f);
-  std::fill(isometric_.hinges.lambda.begin(), isometric_.hinges.lambda.end(), 0.0f);
+  if (forests_.empty()) return;
+  tension_.swap(stretch_.lambda);
+  stretch_.lambda.assign(tension_.size(), 0.0f);
 }
 
 // The forests first: they carry the load to the pins; then Gauss-Seidel over all edges.
-void ClothSolver::solve_stretch(const kernels::ParticleView& p, float dt) {
+void ClothSolver::solve_stretch(const kernels::ParticleView& p, float dt, int iteration) {
   for (kernels::DistanceForest& f : forests_) kernels::solve_distance_forest(p, stretch_, f, dt, tension_.data());
-  kernels::solve_distance_constraints(p, stretch_, dt);
+  packed_.pack(p);
+  const bool first_solve = iteration == 0 && forests_.empty();
+  kernels::solve_distance_constraints(
+      packed_, stretch_, dt,
+      first_solve ? kernels::Multipliers::Restart : kernels::Multipliers::Accumulate);
+  if (has_bending())
+    packed_ahead_ = true;  // solve_bending goes on with the records and writes them back
+  else
+    packed_.unpack(p);
 }
 
 std::span<const float> ClothSolver::forest_tension() const {
@@ -280,9 +297,14 @@ void ClothSolver::restore_forest_tension(std::span<const float> saved) {
   std::copy(saved.begin(), saved.end(), stretch_.lambda.begin());
 }
 
-void ClothSolver::solve_bending(const kernels::ParticleView& p, float dt) {
-  if (dihedral_.size()) kernels::solve_dihedral_bending(p, dihedral_, dt);
-  if (isometric_.size()) kernels::solve_isometric_bending(p, isometric_, dt);
+void ClothSolver::solve_bending(const kernels::ParticleView& p, float dt, int iteration) {
+  if (!packed_ahead_) packed_.pack(p);
+  const auto start =
+      iteration == 0 ? kernels::Multipliers::Restart : kernels::Multipliers::Accumulate;
+  if (dihedral_.size()) kernels::solve_dihedral_bending(packed_, dihedral_, dt, start);
+  if (isometric_.size()) kernels::solve_isometric_bending(packed_, isometric_, dt, start);
+  packed_.unpack(p);
+  packed_ahead_ = false;
 }
 
 void ClothSolver::solve_tethers(const kernels::ParticleView& p) { kernels::solve_tethers(p, tethers_); }
@@ -294,6 +316,7 @@ void ClothSolver::remap(std::span<const std::uint32_t> new_index) {
   isometric_.hinges.remap(new_index);
   tethers_.remap(new_index);
   for (auto& f : forests_) f.remap(new_index);
+  reset_packed_range();
 }
 
 ClothError ClothSolver::measure(const kernels::ParticleView& p) const {

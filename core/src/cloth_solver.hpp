@@ -23,6 +23,7 @@
 #include "seiche/kernels/distance_tree.hpp"
 #include "seiche/kernels/hinges.hpp"
 #include "seiche/kernels/isometric_bending.hpp"
+#include "seiche/kernels/packed_positions.hpp"
 #include "seiche/kernels/particle_view.hpp"
 #include "seiche/kernels/tethers.hpp"
 #include "seiche/particle_store.hpp"
@@ -67,8 +68,14 @@ class ClothSolver {
   bool adjacent(std::size_t c, std::uint32_t u, std::uint32_t v) const;
 
   void begin_substep();
-  void solve_stretch(const kernels::ParticleView& p, float dt);
-  void solve_bending(const kernels::ParticleView& p, float dt);
+  /// One iteration of the stretch constraints (iteration counts from 0 in each substep): the
+  /// forests on the store's columns, then the colored edges on the packed positions, which stay
+  /// packed for solve_bending when the cloths bend (the bending pass directly follows this one,
+  /// Simulation::assemble_pipeline), so px, py, pz are behind until then; else they are written
+  /// back here.
+  void solve_stretch(const kernels::ParticleView& p, float dt, int iteration);
+  /// One iteration of the bending constraints on the packed positions; writes them back.
+  void solve_bending(const kernels::ParticleView& p, float dt, int iteration);
   void solve_tethers(const kernels::ParticleView& p);
   void remap(std::span<const std::uint32_t> new_index);
   /// The stretch multipliers of the last substep when there are forests (their geometric
@@ -85,6 +92,8 @@ class ClothSolver {
 
  private:
   void build_tethers(std::size_t c, std::size_t first, std::span<const std::uint8_t> pinned);
+  /// The packed range: every store index the colored constraints use.
+  void reset_packed_range();
 
   std::vector<ClothDef> scene_cloths_;
   std::vector<ClothShape> shapes_;
@@ -98,6 +107,10 @@ class ClothSolver {
   kernels::Tethers tethers_;  // all cloths' tethers, appended cloth by cloth
   std::vector<kernels::DistanceForest> forests_;  // cloth stretch_forests (kernels/distance_tree.hpp)
   std::vector<float> tension_;  // stretch multipliers of the previous substep
+  // Positions and inverse masses for the colored solves, packed once per iteration for stretch
+  // and bending (kernels/packed_positions.hpp); its range is kept from create and remap.
+  kernels::PackedPositions packed_;
+  bool packed_ahead_ = false;  // the records hold newer positions than px, py, pz
 };
 
 }  // namespace seiche

@@ -228,9 +228,14 @@ void Simulation::assemble_pipeline() {
     constraint_passes_.push_back({"distance", [this](const StepContext& c) { distance_->solve(view(), c.dt); }});
   }
   if (cloth_) {
-    constraint_passes_.push_back({"cloth stretch", [this](const StepContext& c) { cloth_->solve_stretch(view(), c.dt); }});
+    // Bending directly after stretch: the stretch pass leaves the positions packed for it.
+    constraint_passes_.push_back({"cloth stretch", [this](const StepContext& c) {
+                                    cloth_->solve_stretch(view(), c.dt, c.iteration);
+                                  }});
     if (cloth_->has_bending())
-      constraint_passes_.push_back({"cloth bending", [this](const StepContext& c) { cloth_->solve_bending(view(), c.dt); }});
+      constraint_passes_.push_back({"cloth bending", [this](const StepContext& c) {
+                                      cloth_->solve_bending(view(), c.dt, c.iteration);
+                                    }});
     if (cloth_->has_tethers())
       constraint_passes_.push_back({"tethers", [this](const StepContext&) { cloth_->solve_tethers(view()); }});
   }

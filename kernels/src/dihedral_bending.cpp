@@ -94,19 +94,26 @@ void build_dihedral_bending(std::span<const std::uint32_t> hinge_vertices,
   }
 }
 
-void solve_dihedral_bending(const ParticleView& p, Hinges& h, float dt) {
+void solve_dihedral_bending(const PackedPositions& packed, Hinges& h, float dt, Multipliers start) {
   const float inv_dt2 = 1.0f / (dt * dt);
   const float* const compliance = h.compliance.data();
   const float* const rest_angle = h.rest_angle.data();
   float* const lambda = h.lambda.data();
+  const bool restart = start == Multipliers::Restart;
   colored::solve_colored<4>(
-      p, h.color_start, {h.a.data(), h.b.data(), h.c.data(), h.d.data()},
+      packed.by_index(), h.color_start, {h.a.data(), h.b.data(), h.c.data(), h.d.data()},
       [=](const colored::Batch& batch, const V3<Floats> x[4], const Floats w[4], V3<Floats> dp[4]) {
         const Floats alpha = batch.load(compliance) * Floats(inv_dt2);
-        const Floats l = batch.load(lambda);
+        const Floats l = restart ? Floats(0.0f) : batch.load(lambda);
         const Floats dlambda = dihedral_step(x, w, batch.load(rest_angle), alpha, l, dp);
         batch.store(lambda, l + dlambda);
       });
+}
+
+void solve_dihedral_bending(const ParticleView& p, Hinges& h, float dt) {
+  colored::solve_packed(p, {h.a, h.b, h.c, h.d}, [&](const PackedPositions& packed) {
+    solve_dihedral_bending(packed, h, dt, Multipliers::Accumulate);
+  });
 }
 
 }  // namespace seiche::kernels

@@ -66,20 +66,28 @@ SEICHE_INLINE inline T distance_step(const V3<T> p[2], const T w[2], const T& re
 
 }  // namespace
 
-void solve_distance_constraints(const ParticleView& p, DistanceConstraints& c, float dt) {
+void solve_distance_constraints(const PackedPositions& packed, DistanceConstraints& c, float dt,
+                                Multipliers start) {
   const float inv_dt2 = 1.0f / (dt * dt);
   const float* const compliance = c.compliance.data();
   const float* const rest_length = c.rest_length.data();
   float* const lambda = c.lambda.data();
+  const bool restart = start == Multipliers::Restart;
   colored::solve_colored<2>(
-      p, c.color_start, {c.i.data(), c.j.data()},
+      packed.by_index(), c.color_start, {c.i.data(), c.j.data()},
       [=](const colored::Batch& batch, const V3<simd::Floats> x[2], const simd::Floats w[2],
           V3<simd::Floats> dp[2]) {
         const simd::Floats alpha = batch.load(compliance) * simd::Floats(inv_dt2);
-        const simd::Floats l = batch.load(lambda);
+        const simd::Floats l = restart ? simd::Floats(0.0f) : batch.load(lambda);
         const simd::Floats dlambda = distance_step(x, w, batch.load(rest_length), alpha, l, dp);
         batch.store(lambda, l + dlambda);
       });
+}
+
+void solve_distance_constraints(const ParticleView& p, DistanceConstraints& c, float dt) {
+  colored::solve_packed(p, {c.i, c.j}, [&](const PackedPositions& packed) {
+    solve_distance_constraints(packed, c, dt, Multipliers::Accumulate);
+  });
 }
 
 DistanceError distance_constraint_error(const ParticleView& p, const DistanceConstraints& c) {

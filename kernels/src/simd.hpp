@@ -1,4 +1,5 @@
-// Small xsimd helpers shared by the neighbor-pass kernels (internal to kernels/).
+// Small xsimd helpers shared by the kernels (internal to kernels/): 16-byte record gathers and
+// scatters (neighbor passes, colored constraint solves, packing) and the neighbor-pass loops.
 //
 // The neighbor passes run lane = particle: a batch holds kLanes consecutive particles (a
 // NeighborGroup), and slot k of the loop processes the k-th neighbor of each of them. The
@@ -27,6 +28,16 @@ namespace seiche::kernels::simd {
 using Floats = xsimd::batch<float>;
 using Mask = xsimd::batch_bool<float>;
 inline constexpr std::size_t kLanes = Floats::size;
+
+/// Hides where v comes from from the optimizer (an empty asm that "may change" it), so that it
+/// neither reuses values computed from it earlier nor keeps them live: for addresses that are
+/// cheaper to recompute than to keep in registers across a long computation.
+template <class T>
+SEICHE_INLINE inline void opaque(T& v) {
+#if defined(__GNUC__)
+  asm("" : "+r"(v));
+#endif
+}
 
 /// The four components of kLanes Float4 records, transposed into four batches (lane l holds
 /// records[index(l)]). One 16-byte load per record and a register transpose: xsimd 8's gather
@@ -65,6 +76,36 @@ inline Gathered4 gather4(const Float4* records, const Index& index) {
   }
   return {Floats::load_aligned(x), Floats::load_aligned(y), Floats::load_aligned(z),
           Floats::load_aligned(w)};
+#endif
+}
+
+/// Writes lane l of (x, y, z, w) to records[index(l)] for l < active: the transpose of
+/// simd::gather4, one 16-byte store per record.
+template <class Index>
+SEICHE_INLINE inline void scatter4(Float4* records, const Index& index, const Floats& x,
+                                   const Floats& y, const Floats& z, const Floats& w,
+                                   std::size_t active = kLanes) {
+#if XSIMD_WITH_AVX && !XSIMD_WITH_AVX512F
+  static_assert(kLanes == 8);
+  const __m256 t0 = _mm256_unpacklo_ps(x, y);  // x0 y0 x1 y1 | x4 y4 x5 y5
+  const __m256 t1 = _mm256_unpackhi_ps(x, y);  // x2 y2 x3 y3 | x6 y6 x7 y7
+  const __m256 t2 = _mm256_unpacklo_ps(z, w);  // z0 w0 z1 w1 | z4 w4 z5 w5
+  const __m256 t3 = _mm256_unpackhi_ps(z, w);  // z2 w2 z3 w3 | z6 w6 z7 w7
+  const __m256 r0 = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(1, 0, 1, 0));  // records 0 | 4
+  const __m256 r1 = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(3, 2, 3, 2));  // records 1 | 5
+  const __m256 r2 = _mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(1, 0, 1, 0));  // records 2 | 6
+  const __m256 r3 = _mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(3, 2, 3, 2));  // records 3 | 7
+  auto put = [&](std::size_t l, __m128 v) {
+    if (l < active) _mm_store_ps(&records[index(l)].x, v);
+  };
+  put(0, _mm256_castps256_ps128(r0)), put(1, _mm256_castps256_ps128(r1));
+  put(2, _mm256_castps256_ps128(r2)), put(3, _mm256_castps256_ps128(r3));
+  put(4, _mm256_extractf128_ps(r0, 1)), put(5, _mm256_extractf128_ps(r1, 1));
+  put(6, _mm256_extractf128_ps(r2, 1)), put(7, _mm256_extractf128_ps(r3, 1));
+#else
+  alignas(64) float tx[kLanes], ty[kLanes], tz[kLanes], tw[kLanes];
+  x.store_aligned(tx), y.store_aligned(ty), z.store_aligned(tz), w.store_aligned(tw);
+  for (std::size_t l = 0; l < active; ++l) records[index(l)] = {tx[l], ty[l], tz[l], tw[l]};
 #endif
 }
 

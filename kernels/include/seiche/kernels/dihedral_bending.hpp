@@ -14,6 +14,8 @@
 #include <span>
 
 #include "seiche/kernels/hinges.hpp"
+#include "seiche/kernels/packed_positions.hpp"
+#include "seiche/kernels/xpbd_multipliers.hpp"
 
 namespace seiche::kernels {
 
@@ -25,7 +27,10 @@ void build_dihedral_bending(std::span<const std::uint32_t> hinge_vertices,
                             std::span<const float> bend_compliance, const ParticleView& rest,
                             Hinges& out);
 
-/// One XPBD iteration over every hinge, color by color.
+/// One XPBD iteration over every hinge, color by color, on positions packed by the caller (their
+/// range must cover every index of the hinges).
+void solve_dihedral_bending(const PackedPositions& packed, Hinges& h, float dt, Multipliers start);
+/// The same on the store's columns (packs and unpacks the hinges' range), accumulating lambda.
 void solve_dihedral_bending(const ParticleView& p, Hinges& h, float dt);
 
 }  // namespace seiche::kernels

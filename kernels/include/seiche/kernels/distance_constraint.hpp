@@ -18,7 +18,9 @@
 #include <span>
 #include <vector>
 
+#include "seiche/kernels/packed_positions.hpp"
 #include "seiche/kernels/particle_view.hpp"
+#include "seiche/kernels/xpbd_multipliers.hpp"
 
 namespace seiche::kernels {
 
@@ -28,7 +30,8 @@ struct DistanceConstraints {
   std::vector<std::uint32_t> i, j;
   std::vector<float> rest_length;  ///< m
   std::vector<float> compliance;   ///< m/N
-  std::vector<float> lambda;       ///< accumulated multiplier, reset every substep
+  std::vector<float> lambda;       ///< accumulated multiplier, from 0 every substep (a reset, or
+                                   ///< the substep's first solve with Multipliers::Restart)
   std::vector<std::uint32_t> color_start;
 
   std::size_t size() const { return i.size(); }
@@ -43,7 +46,11 @@ std::vector<std::uint32_t> color_distance_constraints(std::span<const std::uint3
                                                       std::size_t particle_count,
                                                       DistanceConstraints& out);
 
-/// One XPBD iteration over every constraint (all colors).
+/// One XPBD iteration over every constraint (all colors), on positions packed by the caller
+/// (their range must cover every index of c).
+void solve_distance_constraints(const PackedPositions& packed, DistanceConstraints& c, float dt,
+                                Multipliers start);
+/// The same on the store's columns (packs and unpacks the constraints' range), accumulating lambda.
 void solve_distance_constraints(const ParticleView& p, DistanceConstraints& c, float dt);
 
 /// |C| / d per constraint (|C| in metres where d = 0), evaluated at positions x, y, z.

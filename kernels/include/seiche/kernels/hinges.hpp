@@ -20,7 +20,8 @@ struct Hinges {
   std::vector<std::uint32_t> a, b, c, d;  ///< store indices (remapped on reorder)
   std::vector<float> rest_angle;          ///< rad, theta of the rest shape, in (-pi, pi]
   std::vector<float> compliance;          ///< per hinge, as the solve uses it (see each model)
-  std::vector<float> lambda;              ///< XPBD multiplier, reset every substep
+  std::vector<float> lambda;              ///< XPBD multiplier, from 0 every substep (a reset,
+                                          ///< or the first solve with Multipliers::Restart)
   std::vector<std::uint32_t> color_start; ///< color c: hinges [color_start[c], color_start[c+1])
 
   std::size_t size() const { return a.size(); }

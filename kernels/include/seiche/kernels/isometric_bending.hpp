@@ -22,6 +22,8 @@
 #include <vector>
 
 #include "seiche/kernels/hinges.hpp"
+#include "seiche/kernels/packed_positions.hpp"
+#include "seiche/kernels/xpbd_multipliers.hpp"
 
 namespace seiche::kernels {
 
@@ -43,7 +45,11 @@ void build_isometric_bending(std::span<const std::uint32_t> hinge_vertices,
                              std::span<const float> bend_compliance, const ParticleView& rest,
                              IsometricBending& out);
 
-/// One XPBD iteration over every hinge, color by color.
+/// One XPBD iteration over every hinge, color by color, on positions packed by the caller (their
+/// range must cover every index of the hinges).
+void solve_isometric_bending(const PackedPositions& packed, IsometricBending& b, float dt,
+                             Multipliers start);
+/// The same on the store's columns (packs and unpacks the hinges' range), accumulating lambda.
 void solve_isometric_bending(const ParticleView& p, IsometricBending& b, float dt);
 
 }  // namespace seiche::kernels
