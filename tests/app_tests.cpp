@@ -360,18 +360,31 @@ TEST(CliBake, FailedFrameWriteIsExitCode3AndKeepsTheLastCompleteFrame) {
 }
 
 TEST(Cli, FailedFrameWriteIsExitCode3AndKeepsTheFramesBefore) {
-  // Frame files are written in the background while the next frame is simulated: a failure
-  // still stops the run with the file's name, and every frame before it is on disk.
-  const fs::path dir = work_dir() / "run_failed_write";
-  fs::remove_all(dir);
+  // seiche run writes a frame's files (PLY, then each cloth's OBJ) in the background while it
+  // simulates the next frame. A failed write must still stop the run with the file's name,
+  // before anything of a later frame is recorded or written, and every frame before it must be
+  // complete: the same bytes as an undisturbed run's.
+  const fs::path flag = fs::path(SEICHE_SCENES_DIR) / "flag.json";
+  const fs::path clean = fresh_dir("run_clean"), dir = fresh_dir("run_failed_write");
+  ASSERT_EQ(seiche("run " + q(flag) + " --frames 2 --out " + q(clean)).code, 0);
   fs::create_directories(dir / "particles.0003.ply" / "x");  // its rename fails, as on a full disk
-  const Result r = seiche("run " + q(write_scene("io.json", kValid)) + " --frames 6 --out " + q(dir));
+  const Result r = seiche("run " + q(flag) + " --frames 6 --out " + q(dir) + " --report " + q(dir / "report.json"));
   EXPECT_EQ(r.code, 3) << r.err;
   EXPECT_NE(r.err.find((dir / "particles.0003.ply").string()), std::string::npos) << r.err;
-  EXPECT_TRUE(fs::exists(dir / "particles.0001.ply"));
-  EXPECT_TRUE(fs::exists(dir / "particles.0002.ply"));
-  for (int f = 4; f <= 6; ++f) EXPECT_FALSE(fs::exists(dir / ("particles.000" + std::to_string(f) + ".ply"))) << f;
+  for (const char* name : {"particles.0001.ply", "particles.0002.ply", "flag.0001.obj", "flag.0002.obj"}) {
+    ASSERT_TRUE(fs::exists(dir / name)) << name;
+    EXPECT_TRUE(slurp(dir / name) == slurp(clean / name)) << name << " differs from the undisturbed run's";
+  }
+  // Frame 3's OBJ was queued after its PLY and is dropped with it; nothing of frames 4-6 exists.
+  for (const char* name : {"flag.0003.obj", "particles.0004.ply", "flag.0004.obj", "particles.0005.ply"})
+    EXPECT_FALSE(fs::exists(dir / name)) << name;
   expect_no_temporary_files(dir);
+  // The report says so, and lists the frames up to the failed one (as a synchronous write did).
+  const std::string report = slurp(dir / "report.json");
+  EXPECT_NE(report.find("\"status\": \"error\""), std::string::npos) << report.substr(0, 200);
+  EXPECT_NE(report.find("particles.0003.ply"), std::string::npos);
+  EXPECT_NE(report.find("\"frame\": 3,"), std::string::npos);
+  EXPECT_EQ(report.find("\"frame\": 4,"), std::string::npos);
 }
 
 TEST(CliBake, FileSizeLimitActsLikeAFullDisk) {

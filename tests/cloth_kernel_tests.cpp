@@ -1,6 +1,6 @@
 // Cloth kernels: coloring, hinges and both bending models, tethers, particle contacts, the SDF
-// grid and the capsule/SDF colliders. Each against hand math, finite differences, physics or a
-// plain scalar reference; raw arrays, no scene.
+// grid, the capsule/SDF colliders and the distance forest's line search. Each against hand math,
+// finite differences, physics or a plain scalar reference; raw arrays, no scene.
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
@@ -13,9 +13,11 @@
 #include <random>
 #include <vector>
 
+#include "dense_distance_projection.hpp"
 #include "seiche/kernels/collisions.hpp"
 #include "seiche/kernels/dihedral_bending.hpp"
 #include "seiche/kernels/distance_constraint.hpp"
+#include "seiche/kernels/distance_tree.hpp"
 #include "seiche/kernels/graph_coloring.hpp"
 #include "seiche/kernels/hinges.hpp"
 #include "seiche/kernels/isometric_bending.hpp"
@@ -1294,6 +1296,110 @@ TEST(ClothSolveDeterminism, PackedOnceAndRestartedIsTheSameAsPackedPerFamilyAfte
   EXPECT_TRUE(bit_identical(ia.hinges.lambda, ib.hinges.lambda));
   EXPECT_FALSE(bit_identical(a.py, init.py));
   EXPECT_TRUE(a.finite());
+}
+
+// ---- Distance forest: the line search (distance_tree.hpp, safeguard 2) --------------------------
+
+using test::Positions;
+
+// A chain pin 0 - 1 - 2 as one tree of the forest: edge k joins particle k + 1 to its parent k,
+// rest length 1, multipliers 0. The positions given are the predicted ones (what the solve moves).
+struct Chain {
+  Particles p{3, Material::Cloth};
+  DistanceConstraints c;
+  DistanceForest forest;
+  Chain(const Positions& x, float w1, float w2, float compliance) {
+    for (std::size_t v = 0; v < 3; ++v) p.set(v, x[v][0], x[v][1], x[v][2]);
+    p.w = {0.0f, w1, w2};
+    c.i = {1, 2}, c.j = {0, 1};
+    c.rest_length = {1.0f, 1.0f}, c.compliance = {compliance, compliance}, c.lambda = {0.0f, 0.0f};
+    const std::uint32_t particle[] = {0, 1, 2}, parent[] = {DistanceForest::kRoot, 0, 1},
+                        edge[] = {0, 0, 1};
+    forest = make_distance_forest(particle, parent, edge);
+  }
+  Positions predicted() const { return {p.predicted(0), p.predicted(1), p.predicted(2)}; }
+  // The nonlinear violation sum_e |C_e| = sum_e | |x_i - x_j| - rest_e |, in double.
+  double violation(const Positions& x) const {
+    double sum = 0.0;
+    for (std::size_t e = 0; e < c.size(); ++e) {
+      const auto &a = x[c.i[e]], &b = x[c.j[e]];
+      sum += std::abs(std::hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]) - double(c.rest_length[e]));
+    }
+    return sum;
+  }
+};
+
+// The full, unguarded linearized XPBD step at the predicted positions (the dense reference of
+// tests/dense_distance_projection.hpp, as Cloth.ForestSolveMatchesTheDenseLinearizedProjection
+// uses it).
+using LinearizedStep = test::DenseProjection;
+LinearizedStep linearized_step(const Chain& ch, float dt) {
+  return test::dense_distance_projection(ch.c, ch.predicted(), ch.p.w, ch.c.lambda, dt);
+}
+
+Positions step_by(const Positions& x, const LinearizedStep& s, double beta) {
+  Positions y = x;
+  for (std::size_t v = 0; v < x.size(); ++v)
+    for (int a = 0; a < 3; ++a) y[v][a] += beta * s.dx[v][a];
+  return y;
+}
+
+TEST(DistanceForest, LineSearchShortensAStepThatWouldSwingALightBeadFarOffItsEdge) {
+  // A rigid chain pin (origin) - light bead 1 (mass 0.1, at (1, 0, 0)) - particle 2 (mass 1)
+  // whose predicted position has swung round to (-1, 0.5, 0): edge 1-2 is 2.06 long for a rest
+  // length of 1. To first order edge 0-1 does not resist a sideways move of the bead, so the
+  // linearized step moves the bead 1.6 across it and stretches it to 1.9: sum |C| grows from
+  // 1.06 to 1.77. Asserted: the solve takes that step's direction shortened by one of the
+  // halvings 1/2 .. 1/16 (positions and multipliers alike, to float rounding of the elimination),
+  // and ends with less violation than the full step and than before it. With beta = 1 always
+  // accepted the result is the full step, which fails all of these.
+  const float dt = 1.0f / 60.0f;
+  Chain ch({{0, 0, 0}, {1, 0, 0}, {-1, 0.5, 0}}, 10.0f, 1.0f, 0.0f);
+  const Positions x0 = ch.predicted();
+  const LinearizedStep full = linearized_step(ch, dt);
+  const Positions x_full = step_by(x0, full, 1.0);
+  ASSERT_GT(ch.violation(x_full), ch.violation(x0) + 0.5);  // the premise: the full step overshoots
+
+  solve_distance_forest(ch.p.view(), ch.c, ch.forest, dt, nullptr);
+  const Positions x1 = ch.predicted();
+  double num = 0.0, den = 0.0;  // the step length taken, along the full step
+  for (std::size_t v = 0; v < 3; ++v)
+    for (int a = 0; a < 3; ++a)
+      num += (x1[v][a] - x0[v][a]) * full.dx[v][a], den += full.dx[v][a] * full.dx[v][a];
+  const double beta = std::exp2(std::round(std::log2(num / den)));
+  EXPECT_NEAR(num / den, beta, 1e-6);
+  EXPECT_GE(beta, 1.0 / 16.0);
+  EXPECT_LE(beta, 0.5);
+  const Positions expected = step_by(x0, full, beta);
+  for (std::size_t v = 0; v < 3; ++v)
+    for (int a = 0; a < 3; ++a) EXPECT_NEAR(x1[v][a], expected[v][a], 1e-6) << "vertex " << v;
+  for (std::size_t e = 0; e < 2; ++e)
+    EXPECT_NEAR(ch.c.lambda[e], beta * full.dlambda[e], 1e-6) << "edge " << e;
+  EXPECT_LT(ch.violation(x1), ch.violation(x_full) - 0.5);
+  EXPECT_LT(ch.violation(x1), ch.violation(x0));
+}
+
+TEST(DistanceForest, NearlyLinearStepIsTakenInFull) {
+  // The same chain, compliant, with edges off their rest length by at most 1 %: the step moves
+  // the particles by about 1e-2 and turns the edges by under a degree, the linearization holds,
+  // so the line search accepts beta = 1 and the solve is the full linearized step. Asserted:
+  // positions and multipliers equal the dense double solution to float rounding (1e-6), where a
+  // halved step would be off by over 5e-3.
+  const float dt = 1.0f / 60.0f;
+  Chain ch({{0, 0, 0}, {1.01, 0.02, 0}, {1.99, 0.22, 0.03}}, 10.0f, 1.0f, 1e-4f);
+  const Positions x0 = ch.predicted();
+  const LinearizedStep full = linearized_step(ch, dt);
+  const Positions x_full = step_by(x0, full, 1.0);
+  double largest = 0.0;
+  for (const auto& d : full.dx) largest = std::max(largest, std::hypot(d[0], d[1], d[2]));
+  ASSERT_GT(largest, 1e-2);
+
+  solve_distance_forest(ch.p.view(), ch.c, ch.forest, dt, nullptr);
+  const Positions x1 = ch.predicted();
+  for (std::size_t v = 0; v < 3; ++v)
+    for (int a = 0; a < 3; ++a) EXPECT_NEAR(x1[v][a], x_full[v][a], 1e-6) << "vertex " << v;
+  for (std::size_t e = 0; e < 2; ++e)
+    EXPECT_NEAR(ch.c.lambda[e], full.dlambda[e], 1e-6) << "edge " << e;
 }
 
 }  // namespace

@@ -6,8 +6,9 @@
 // At most `max_pending` files wait in memory: submit() blocks until there is room, so a disk
 // slower than the simulation slows the simulation instead of filling the memory. The first
 // failure (IoError: full disk, no permission) is kept, nothing submitted after it is written,
-// and it is thrown by the next submit() or by finish(): the caller reports it as if it had
-// written the file itself, one frame later at most.
+// and it is thrown by the next submit() or by finish(). `seiche run` calls finish() after
+// simulating each frame, before the frame counts: a failure stops the run one frame later at
+// most, and nothing of a later frame is written.
 #pragma once
 
 #include <condition_variable>

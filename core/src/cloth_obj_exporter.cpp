@@ -28,10 +28,19 @@ class ClothObjExporter final : public FrameExporter {
   }
 
   std::uint64_t write_frame(const FrameView& frame, const std::filesystem::path& dir) override {
+    std::uint64_t bytes = 0;
+    for (const EncodedFile& f : encode_frame(frame)) {
+      write_file_atomically(dir / f.name, f.bytes);
+      bytes += f.bytes.size();
+    }
+    return bytes;
+  }
+
+  std::vector<EncodedFile> encode_frame(const FrameView& frame) const override {
     const ParticleStore& s = frame.particles;
     const std::vector<std::uint32_t> index_of_id = s.index_of_id();
     std::size_t id = s.size() - vertices_;
-    std::uint64_t bytes = 0;
+    std::vector<EncodedFile> out;
     std::vector<Vec3> positions;
     for (std::size_t c = 0; c < shapes_.size(); ++c) {
       const std::size_t n = shapes_[c].mesh.vertex_count();
@@ -40,11 +49,10 @@ class ClothObjExporter final : public FrameExporter {
         const std::uint32_t k = index_of_id[id];
         positions[v] = {s.x[k], s.y[k], s.z[k]};
       }
-      const std::string text = encode_cloth_obj(shapes_[c].mesh, positions);
-      write_file_atomically(dir / frame_file_name(names_[c], frame.frame, "obj"), text);
-      bytes += text.size();
+      out.push_back({frame_file_name(names_[c], frame.frame, "obj"),
+                     encode_cloth_obj(shapes_[c].mesh, positions)});
     }
-    return bytes;
+    return out;
   }
 
  private:

@@ -52,32 +52,41 @@ RunResult run_scene(const SceneDef& scene, const RunOptions& options) {
     if (!options.report.empty()) write_file_atomically(options.report, report.dump());
   };
 
-  BackgroundWriter frame_files;  // PLY frames go to disk while the next frame is simulated
+  // A frame's files (the PLY, then each cloth's OBJ) go to disk while the next frame is
+  // simulated; before a frame counts, the previous frame's files are on disk. So a failed write
+  // stops the run one frame later at most, before anything of the next frame is recorded or
+  // written, and every frame before the failed one is complete.
+  BackgroundWriter frame_files(1 + scene.cloths.size());
   const auto start = Clock::now();
   try {
     for (int f = 1; f <= frames; ++f) {
       const auto frame_start = Clock::now();
       FrameMetrics m = sim.step_frame();
+      frame_files.finish();  // frame f - 1's files are on disk, or their failure is thrown here
       report.add_frame(m, sim.timer());
       result.metrics.push_back(m);
       throw_if_diverged(m, f);
       if (!options.out_dir.empty()) {
         frame_files.submit(options.out_dir / frame_file_name("particles", f, "ply"),
                            encode_particles_ply(sim.particles()));
-        if (cloth_obj) cloth_obj->write_frame({sim.particles(), scene, f, sim.time()}, options.out_dir);
+        if (cloth_obj)
+          for (FrameExporter::EncodedFile& file :
+               cloth_obj->encode_frame({sim.particles(), scene, f, sim.time()}))
+            frame_files.submit(options.out_dir / file.name, std::move(file.bytes));
       }
       result.frames = f;
       const std::chrono::duration<double> elapsed = Clock::now() - start;
       const std::chrono::duration<double> frame_time = Clock::now() - frame_start;
-      progress.frame_done(f, elapsed.count(), f,
-                          fmt::format("{} particles  {:.1f} ms/frame", result.particles, frame_time.count() * 1e3));
+      progress.frame_done(
+          f, elapsed.count(), f,
+          fmt::format("{} particles  {:.1f} ms/frame", result.particles, frame_time.count() * 1e3));
     }
     frame_files.finish();  // the last frames are on disk (or their failure is thrown) here
   } catch (const std::exception& e) {
     report.set_error(e.what());
     try {
       frame_files.finish();  // the frames before the failure are kept
-    } catch (const IoError&) {
+    } catch (...) {
       // the first error is the one to tell
     }
     try {
@@ -93,9 +102,10 @@ RunResult run_scene(const SceneDef& scene, const RunOptions& options) {
   if (options.summary) {
     print_run_summary(*options.summary, scene, result, pipeline);
     if (!options.out_dir.empty())
-      fmt::print(*options.summary, "\noutput: {}/particles.0001.ply .. {}\n", options.out_dir.string(),
-                 frame_file_name("particles", result.frames, "ply"));
-    if (!options.report.empty()) fmt::print(*options.summary, "report: {}\n", options.report.string());
+      fmt::print(*options.summary, "\noutput: {}/particles.0001.ply .. {}\n",
+                 options.out_dir.string(), frame_file_name("particles", result.frames, "ply"));
+    if (!options.report.empty())
+      fmt::print(*options.summary, "report: {}\n", options.report.string());
   }
   return result;
 }

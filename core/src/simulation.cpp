@@ -228,7 +228,8 @@ void Simulation::assemble_pipeline() {
     constraint_passes_.push_back({"distance", [this](const StepContext& c) { distance_->solve(view(), c.dt); }});
   }
   if (cloth_) {
-    // Bending directly after stretch: the stretch pass leaves the positions packed for it.
+    // Bending must directly follow stretch: the stretch pass leaves the positions packed for it,
+    // and px, py, pz are stale until bending unpacks them (ClothSolver::solve_stretch).
     constraint_passes_.push_back({"cloth stretch", [this](const StepContext& c) {
                                     cloth_->solve_stretch(view(), c.dt, c.iteration);
                                   }});

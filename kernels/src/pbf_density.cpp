@@ -253,7 +253,8 @@ void apply_correction(const Float4* pos_lambda, NeighborSpan nbr, std::size_t n,
         accumulate(sz, f, q.dz);
       });
       sx *= Floats(grad_scale), sy *= Floats(grad_scale), sz *= Floats(grad_scale);
-      if (prm.walls && near_a_wall(prm, pi)) {  // lambda_i f'(d) n: the wall's part of the particle's own constraint
+      // lambda_i f'(d) n: the wall's part of the particle's own constraint
+      if (prm.walls && near_a_wall(prm, pi)) {
         const WallSum<Floats> wall = domain_walls(prm, pi);
         const Floats push = pi.w;
         sx += push * wall.gx, sy += push * wall.gy, sz += push * wall.gz;

@@ -6,8 +6,9 @@
 // the solvers sum in index order. Everything else is either rebuilt from the scene (constraints,
 // rest lengths, particle mass, the grid) or recomputed every substep (neighbor lists, density,
 // lambda, vorticity), except the cloth stretch multipliers of the last substep, which the
-// stretch forests' geometric stiffness reads in the next one (kernels/distance_tree.hpp). Restoring builds a fresh Simulation from the same scene, reorders it into
-// the saved order (which remaps every index held elsewhere) and overwrites the state columns.
+// stretch forests' geometric stiffness reads in the next one (kernels/distance_tree.hpp).
+// Restoring builds a fresh Simulation from the same scene, reorders it into the saved order
+// (which remaps every index held elsewhere) and overwrites the state columns.
 //
 // File layout (little-endian), format version 2:
 //   char[8]  magic "SEICHECP"

@@ -33,6 +33,16 @@ class FrameExporter {
   /// Writes this frame's files into `dir`, each atomically (write_file_atomically). Returns the
   /// bytes written. Throws IoError when a file cannot be written.
   virtual std::uint64_t write_frame(const FrameView& frame, const std::filesystem::path& dir) = 0;
+
+  /// One file of a frame as bytes: its name relative to the output folder and its contents.
+  struct EncodedFile {
+    std::filesystem::path name;
+    std::string bytes;
+  };
+  /// This frame's files as bytes, for a caller that writes them itself (seiche run hands them
+  /// to its background writer). Empty for an exporter whose library writes its own files
+  /// (OpenVDB): such an exporter is only used through write_frame().
+  virtual std::vector<EncodedFile> encode_frame(const FrameView&) const { return {}; }
 };
 
 }  // namespace seiche
