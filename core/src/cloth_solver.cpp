@@ -177,9 +177,9 @@ void ClothSolver::create(ParticleStore& store, std::size_t first, const kernels:
     if (def.tethers) build_tethers(c, base, pinned);
     // Forests of the edges, each over the edges the previous ones left (kernels/distance_tree.hpp).
     std::vector<std::uint8_t> used(topo.edges.size(), 0);
-    // By default (ClothDef::kPinForest) one forest for a cloth with pins, none without.
+    // By default (the key absent) one forest for a cloth with pins, none without.
     const bool has_pins = std::find(pinned.begin(), pinned.end(), std::uint8_t(1)) != pinned.end();
-    const int forests = def.stretch_forests == ClothDef::kPinForest ? (has_pins ? 1 : 0) : def.stretch_forests;
+    const int forests = def.stretch_forests.value_or(has_pins ? 1 : 0);
     if (raw_forests.size() < std::size_t(forests)) raw_forests.resize(std::size_t(forests));
     for (int k = 0; k < forests; ++k)
       grow_shortest_path_forest(shapes_[c], base, pinned, edge_i.size() - topo.edges.size(), used,

@@ -433,7 +433,9 @@ ClothDef read_cloth(JsonReader r, std::size_t index) {
   r.read("bend_compliance", c.bend_compliance, Range::above(0));
   r.read_choice("bending", c.bending, {"dihedral", "isometric"});
   r.read("tethers", c.tethers);
-  r.read("stretch_forests", c.stretch_forests, Range::closed(0, 3));
+  int forests = -1;  // absent: the pin-dependent default (ClothDef::stretch_forests)
+  r.read("stretch_forests", forests, Range::closed(0, 3));
+  if (forests >= 0) c.stretch_forests = forests;
   r.read("self_collision", c.self_collision);
   r.read("friction", c.friction, Range::at_least(0));
   r.read("pins", c.pins, Range::at_least(0));

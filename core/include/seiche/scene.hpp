@@ -119,10 +119,9 @@ struct ClothDef {
   /// Spanning forests of the edges (0..3) whose stretch constraints are solved exactly, in linear
   /// time, every iteration before the Gauss-Seidel sweep: the first grows from the pins and
   /// carries the cloth's weight to them; each further one takes edges the others left.
-  /// kPinForest (the default, the key absent): 1 for a cloth with pins (`pins` or a `pin_box`
-  /// that holds a vertex), 0 (Gauss-Seidel only, no cost) otherwise.
-  static constexpr int kPinForest = -1;
-  int stretch_forests = kPinForest;
+  /// Absent (the default): 1 for a cloth with pins (`pins` or a `pin_box` that holds a vertex),
+  /// 0 (Gauss-Seidel only, no cost) otherwise.
+  std::optional<int> stretch_forests;
   bool self_collision = false;      ///< particle contacts between non-adjacent vertices
   float friction = 0.3f;            ///< Coulomb friction of the cloth's contacts (>= 0)
   std::vector<int> pins;            ///< vertex indices pinned (mass 0)
