@@ -288,11 +288,11 @@ void ClothSolver::solve_stretch(const kernels::ParticleView& p, float dt, int it
     packed_.unpack(p);
 }
 
-std::span<const float> ClothSolver::forest_tension() const {
+std::span<const float> ClothSolver::stretch_multipliers() const {
   return forests_.empty() ? std::span<const float>() : std::span<const float>(stretch_.lambda);
 }
 
-void ClothSolver::restore_forest_tension(std::span<const float> saved) {
+void ClothSolver::restore_stretch_multipliers(std::span<const float> saved) {
   if (forests_.empty() || saved.size() != stretch_.lambda.size()) return;
   std::copy(saved.begin(), saved.end(), stretch_.lambda.begin());
 }

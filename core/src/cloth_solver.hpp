@@ -80,8 +80,8 @@ class ClothSolver {
   void remap(std::span<const std::uint32_t> new_index);
   /// The stretch multipliers of the last substep when there are forests (their geometric
   /// stiffness reads them in the next substep), else empty; restored from a checkpoint.
-  std::span<const float> forest_tension() const;
-  void restore_forest_tension(std::span<const float> saved);
+  std::span<const float> stretch_multipliers() const;
+  void restore_stretch_multipliers(std::span<const float> saved);
 
   /// The constraints as built (store indices), for the implicit-Euler reference of the bench.
   const kernels::DistanceConstraints& stretch() const { return stretch_; }

@@ -363,11 +363,11 @@ void Simulation::restore_state(const ParticleStore& saved, int frames_done) {
 }
 
 std::span<const float> Simulation::cloth_stretch_multipliers() const {
-  return cloth_ ? cloth_->forest_tension() : std::span<const float>();
+  return cloth_ ? cloth_->stretch_multipliers() : std::span<const float>();
 }
 
 void Simulation::restore_cloth_stretch_multipliers(std::span<const float> saved) {
-  if (cloth_) cloth_->restore_forest_tension(saved);
+  if (cloth_) cloth_->restore_stretch_multipliers(saved);
 }
 
 FrameMetrics Simulation::state_metrics() const {

@@ -78,26 +78,11 @@ inline Floats select(const simd::Mask& m, const Floats& a, const Floats& b) {
 inline float vsqrt(float x) { return std::sqrt(x); }  // both correctly rounded: same bits
 inline Floats vsqrt(const Floats& x) { return xsimd::sqrt(x); }
 
-/// kLanes consecutive constraints [k0, k0 + active) of one color.
-struct Batch {
-  std::size_t k0 = 0, active = 0;
-  bool full() const { return active == kLanes; }
+/// kLanes consecutive constraints [i, i + active) of one color: simd::Lanes over the
+/// constraints' columns (load and store of a partial batch included).
+struct Batch : simd::Lanes {
   /// Constraint of lane l: padding lanes repeat the last active constraint.
-  std::size_t at(std::size_t l) const { return k0 + std::min(l, active - 1); }
-  /// column[k0 + l] per lane.
-  Floats load(const float* column) const {
-    if (full()) return Floats::load_unaligned(column + k0);
-    alignas(64) float t[kLanes];
-    for (std::size_t l = 0; l < kLanes; ++l) t[l] = column[at(l)];
-    return Floats::load_aligned(t);
-  }
-  /// Lane l of v to column[k0 + l], active lanes only.
-  void store(float* column, const Floats& v) const {
-    if (full()) return v.store_unaligned(column + k0);
-    alignas(64) float t[kLanes];
-    v.store_aligned(t);
-    for (std::size_t l = 0; l < active; ++l) column[k0 + l] = t[l];
-  }
+  std::size_t at(std::size_t l) const { return i + std::min(l, active - 1); }
 };
 
 /// body(std::integral_constant<std::size_t, s>) for s = 0 .. N - 1.
@@ -122,7 +107,7 @@ SEICHE_INLINE inline void solve_batch(Float4* records, std::array<const std::uin
   for_each_slot<N>([&](auto s) {
     const std::uint32_t* column = vertex[s];
     const simd::Gathered4 g =
-        Full ? simd::gather4(records, [&](std::size_t l) { return column[batch.k0 + l]; })
+        Full ? simd::gather4(records, [&](std::size_t l) { return column[batch.i + l]; })
              : simd::gather4(records, [&](std::size_t l) { return column[batch.at(l)]; });
     x[s] = {g.x, g.y, g.z};
     w[s] = g.w;
@@ -132,7 +117,7 @@ SEICHE_INLINE inline void solve_batch(Float4* records, std::array<const std::uin
     // The slot's indices from this batch on, through simd::opaque: else g++ reuses the 8 N index
     // addresses of the gather, keeps them across the step and spills them (12 % of the step's
     // instructions, measured at 100 x 100); this way each is one load at an offset.
-    const std::uint32_t* column = vertex[s] + batch.k0;
+    const std::uint32_t* column = vertex[s] + batch.i;
     simd::opaque(column);
     simd::scatter4(
         records, [&](std::size_t l) { return column[l]; }, x[s].x + dp[s].x, x[s].y + dp[s].y,
@@ -159,11 +144,11 @@ void solve_colored(Float4* records, std::span<const std::uint32_t> color_start,
         tbb::blocked_range<std::size_t>(0, full_batches, 16),
         [=](const auto& r) {
           for (std::size_t bi = r.begin(); bi != r.end(); ++bi)
-            solve_batch<true>(records, vertex, Batch{begin + bi * kLanes, kLanes}, step);
+            solve_batch<true>(records, vertex, Batch{{begin + bi * kLanes, kLanes}}, step);
         },
         tbb::static_partitioner());
     const std::size_t tail = begin + full_batches * kLanes;
-    if (tail < end) solve_batch<false>(records, vertex, Batch{tail, end - tail}, step);
+    if (tail < end) solve_batch<false>(records, vertex, Batch{{tail, end - tail}}, step);
   }
 }
 
