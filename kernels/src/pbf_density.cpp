@@ -55,22 +55,18 @@ struct PairTerms {
   T grad, s;
 };
 struct PairConstants {
-  Floats h, h2, r2_min, far, half, three_halves, zero;
+  Floats h, h2, r2_min, far, zero;
   explicit PairConstants(const SphKernel& k)
-      : h(k.h), h2(k.h2), r2_min(kCoincident * k.h2), far(4.0f * k.h2), half(0.5f),
-        three_halves(1.5f), zero(0.0f) {}
+      : h(k.h), h2(k.h2), r2_min(kCoincident * k.h2), far(4.0f * k.h2), zero(0.0f) {}
 };
 template <class T>
 SEICHE_INLINE inline PairTerms<T> pair_terms(const PairConstants& c, const T& r2) {
-  // 1/r from the hardware estimate refined by one Newton step (relative error ~1e-7): no sqrt,
-  // no division in the inner loop. r = r2 y corr, 1/r = y corr.
-  const T r2_safe = vmax(r2, c.r2_min);
-  const T y = vrsqrt(r2_safe);
-  const T ry = r2_safe * y;
-  const T corr = mul_sub_from(ry * y, c.half, c.three_halves);
-  const T inv_r = y * corr;
-  const T t = vmax(mul_sub_from(ry, corr, c.h), c.zero);  // h - r, 0 past h
-  return {keep_if(r2 > c.r2_min, t * t * inv_r), vmax(c.h2 - r2, c.zero)};
+  // r and (h - r)^2 / r from the correctly rounded sqrt and division: the same bits on every
+  // instruction set (a hardware 1/sqrt estimate, even refined by a Newton step, is not; see
+  // seiche/simd/batch.hpp).
+  const T r = xsimd::sqrt(vmax(r2, c.r2_min));
+  const T t = vmax(c.h - r, c.zero);  // h - r, 0 past h
+  return {keep_if(r2 > c.r2_min, t * t / r), vmax(c.h2 - r2, c.zero)};
 }
 
 // Offsets and squared distance from the group's particles to their slot neighbors; lanes past
@@ -84,7 +80,7 @@ SEICHE_INLINE inline PairGeometry<Floats> pair_geometry(const PairConstants& c, 
                                                         const Gathered4& pj, Masked,
                                                         const Mask& valid) {
   const Floats dx = pi.x - pj.x, dy = pi.y - pj.y, dz = pi.z - pj.z;
-  Floats r2 = xsimd::fma(dz, dz, xsimd::fma(dy, dy, dx * dx));
+  Floats r2 = multiply_add(dz, dz, multiply_add(dy, dy, dx * dx));
   if constexpr (Masked::value) r2 = xsimd::select(valid, r2, c.far);
   return {dx, dy, dz, r2};
 }

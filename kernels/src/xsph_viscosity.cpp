@@ -25,12 +25,12 @@ void xsph_viscosity(const Float4* pos, const Float4* vel_volume, NeighborSpan nb
       auto slot = [&](const auto& neighbor, auto masked, const Mask& valid) SEICHE_INLINE {
         const Gathered4 pj = gather4(pos, neighbor), vj = gather4(vel_volume, neighbor);
         const Floats dx = pi.x - pj.x, dy = pi.y - pj.y, dz = pi.z - pj.z;
-        Floats s = xsimd::max(h2 - xsimd::fma(dz, dz, xsimd::fma(dy, dy, dx * dx)), zero);
+        Floats s = xsimd::max(h2 - multiply_add(dz, dz, multiply_add(dy, dy, dx * dx)), zero);
         if constexpr (decltype(masked)::value) s = xsimd::select(valid, s, zero);
         const Floats weight = vj.w * (s * s * s);
-        ax = xsimd::fma(weight, vj.x - vi.x, ax);
-        ay = xsimd::fma(weight, vj.y - vi.y, ay);
-        az = xsimd::fma(weight, vj.z - vi.z, az);
+        ax = multiply_add(weight, vj.x - vi.x, ax);
+        ay = multiply_add(weight, vj.y - vi.y, ay);
+        az = multiply_add(weight, vj.z - vi.z, az);
       };
       const Mask all(true);
       for (; k < group.kmin; ++k)

@@ -16,7 +16,8 @@
 //    result. On a lattice with cells of 2 spacings this keeps ~85 of the ~216 row candidates.
 // 3. Each particle of the group then tests the compacted candidates: a fixed trip count, no
 //    per-particle setup, no tail masks (the padding fails the test), its own index masked out
-//    by comparing j, the passing j packed with one permute and one store per W candidates.
+//    by comparing j, the passing j left-packed (simd::left_pack: a permute or a compress) and
+//    stored, one store per W candidates.
 //
 // Output. Particles are processed in waves of fixed blocks; each block writes its lists to its own
 // scratch buffer, then the wave's offsets are summed in order and the buffers copied into place.
@@ -42,49 +43,18 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <xsimd/xsimd.hpp>
+
+#include "seiche/simd/batch.hpp"
+#include "seiche/simd/shuffles.hpp"
 
 namespace seiche::neighbor {
 namespace {
 
-using Batch = xsimd::batch<float>;
-constexpr std::size_t W = Batch::size;
+using Batch = simd::Floats;
+using Ints = simd::Ints;
+constexpr std::size_t W = simd::kLanes;
 constexpr std::size_t kWaveBlocks = 32;  // blocks per wave: bounds the scratch lists
 constexpr float kInf = std::numeric_limits<float>::infinity();
-
-// ---- SIMD glue xsimd 8.1 lacks (batch_bool::mask() and compress arrived in later versions) ----
-
-inline std::uint32_t lane_bits(const xsimd::batch_bool<float>& b) {
-#if XSIMD_WITH_AVX512F
-  return std::uint32_t(__mmask16(b));  // already a k-mask
-#elif XSIMD_WITH_AVX
-  return std::uint32_t(_mm256_movemask_ps(b));
-#elif XSIMD_WITH_SSE2
-  return std::uint32_t(_mm_movemask_ps(b));
-#else
-  bool lanes[W];
-  b.store_unaligned(lanes);
-  std::uint32_t bits = 0;
-  for (std::size_t l = 0; l < W; ++l) bits |= std::uint32_t(lanes[l]) << l;
-  return bits;
-#endif
-}
-
-#if XSIMD_WITH_AVX2 && !XSIMD_WITH_AVX512F
-#define SEICHE_NB_AVX2 1
-constexpr std::array<std::uint64_t, 256> kPackLanes = [] {  // set lanes of bits, one byte each
-  std::array<std::uint64_t, 256> t{};
-  for (unsigned bits = 0; bits < 256; ++bits)
-    for (unsigned l = 0, k = 0; l < 8; ++l)
-      if (bits >> l & 1) t[bits] |= std::uint64_t(l) << (8 * k++);
-  return t;
-}();
-inline __m256i pack_lanes(std::uint32_t bits) {
-  return _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(std::int64_t(kPackLanes[bits])));
-}
-#else
-#define SEICHE_NB_AVX2 0
-#endif
 
 // Growable array without value-initialisation (new T[] of a trivial type leaves it as is); the
 // first `keep` entries survive growth.
@@ -166,9 +136,7 @@ template <bool kSafe>
   float* const oy = o.y;
   float* const oz = o.z;
   std::uint32_t* const oj = o.j;
-#if SEICHE_NB_AVX2
-  __m256i kv = _mm256_set1_epi32(std::int32_t(b));
-#endif
+  const Ints lanes = simd::lane_index();
   for (std::uint32_t k = b; k < e; k += std::uint32_t(W)) {
     Batch c[3];
     if (kSafe) {
@@ -181,24 +149,14 @@ template <bool kSafe>
     }
     Batch g[3];
     for (int a = 0; a < 3; ++a) g[a] = xsimd::max(xsimd::max(l[a] - c[a], c[a] - h[a]), zero);
-    std::uint32_t bits = lane_bits(g[0] * g[0] + g[1] * g[1] + g[2] * g[2] < r2);
+    std::uint32_t bits = simd::lane_bits(g[0] * g[0] + g[1] * g[1] + g[2] * g[2] < r2);
     if (e - k < W) bits &= (1u << (e - k)) - 1;
-#if SEICHE_NB_AVX2
-    const __m256i lanes = pack_lanes(bits);
-    _mm256_storeu_ps(ox + cnt, _mm256_permutevar8x32_ps(c[0], lanes));
-    _mm256_storeu_ps(oy + cnt, _mm256_permutevar8x32_ps(c[1], lanes));
-    _mm256_storeu_ps(oz + cnt, _mm256_permutevar8x32_ps(c[2], lanes));
-    _mm256_storeu_si256(reinterpret_cast<__m256i*>(oj + cnt), _mm256_add_epi32(lanes, kv));
-    kv = _mm256_add_epi32(kv, _mm256_set1_epi32(std::int32_t(W)));
+    const auto pack = simd::left_pack(bits);
+    pack.store(ox + cnt, c[0]);
+    pack.store(oy + cnt, c[1]);
+    pack.store(oz + cnt, c[2]);
+    pack.store(oj + cnt, Ints(k) + lanes);
     cnt += std::uint32_t(std::popcount(bits));
-#else
-    alignas(64) float t[3][W];
-    for (int a = 0; a < 3; ++a) c[a].store_aligned(t[a]);
-    for (; bits != 0; bits &= bits - 1, ++cnt) {
-      const auto ln = unsigned(std::countr_zero(bits));
-      ox[cnt] = t[0][ln], oy[cnt] = t[1][ln], oz[cnt] = t[2][ln], oj[cnt] = k + ln;
-    }
-#endif
   }
   return cnt;
 }
@@ -239,26 +197,16 @@ inline std::uint32_t query1(const Cand& c, const float* const p[3], std::uint32_
   const std::uint32_t* const cj = c.j;
   const std::uint32_t padded = c.padded;
   std::uint32_t count = 0;
-#if SEICHE_NB_AVX2
-  const __m256i self = _mm256_set1_epi32(std::int32_t(i));
-#endif
+  const Ints self(i);
   for (std::uint32_t k = 0; k < padded; k += std::uint32_t(W)) {
     const Batch dx = qx - Batch::load_unaligned(cx + k);
     const Batch dy = qy - Batch::load_unaligned(cy + k);
     const Batch dz = qz - Batch::load_unaligned(cz + k);
-    std::uint32_t bits = lane_bits(dx * dx + dy * dy + dz * dz < r2);
-#if SEICHE_NB_AVX2
-    const __m256i j = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(cj + k));
-    bits &= ~std::uint32_t(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(j, self))));
-    _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + count),
-                        _mm256_permutevar8x32_epi32(j, pack_lanes(bits)));
+    const Ints j = Ints::load_unaligned(cj + k);
+    const std::uint32_t bits =
+        simd::lane_bits(dx * dx + dy * dy + dz * dz < r2) & simd::lane_bits(j != self);
+    simd::left_pack(bits).store(out + count, j);
     count += std::uint32_t(std::popcount(bits));
-#else
-    for (; bits != 0; bits &= bits - 1) {
-      const std::uint32_t j = cj[k + unsigned(std::countr_zero(bits))];
-      if (j != i) out[count++] = j;
-    }
-#endif
   }
   return count;
 }
@@ -369,22 +317,8 @@ void process_block(const Ctx& ctx, Block& blk, std::uint32_t b0, std::uint32_t b
 // dst[0, count) = src[0, count). `stream`: non-temporal stores, for lists far larger than the
 // caches: they skip reading the destination lines in first (half the memory traffic).
 void copy_list(const std::uint32_t* src, std::size_t count, std::uint32_t* dst, bool stream) {
-#if SEICHE_NB_AVX2
-  if (stream && count >= 64) {
-    const std::size_t head = ((32 - (reinterpret_cast<std::uintptr_t>(dst) & 31)) & 31) / sizeof(std::uint32_t);
-    std::copy_n(src, head, dst);
-    src += head, dst += head, count -= head;
-    std::size_t k = 0;
-    for (; k + 8 <= count; k += 8)
-      _mm256_stream_si256(reinterpret_cast<__m256i*>(dst + k),
-                          _mm256_loadu_si256(reinterpret_cast<const __m256i*>(src + k)));
-    std::copy_n(src + k, count - k, dst + k);
-    _mm_sfence();
-    return;
-  }
-#endif
-  (void)stream;
-  std::copy_n(src, count, dst);
+  if (stream) simd::stream_copy(dst, src, count);
+  else std::copy_n(src, count, dst);
 }
 
 // Lets `v` hold `needed` entries, growing to `estimate` at once (not doubling) to keep memory

@@ -1,0 +1,22 @@
+// What the kernels were compiled for: the SIMD instruction set xsimd chose, its float lane count
+// and whether a multiply-add is fused. Benchmark figures and golden hashes are meaningless
+// without it, so `seiche --version`, the run summary and the bench print it.
+#pragma once
+
+#include <cstddef>
+#include <string>
+
+namespace seiche::kernels {
+
+struct SimdInfo {
+  std::string arch;         ///< xsimd's architecture name: "avx512bw", "fma3+avx2", "sse2", "neon64"
+  std::size_t float_lanes;  ///< floats per batch (a lane is a particle or a constraint)
+  bool fused_multiply_add;  ///< whether the kernels' multiply-adds round once (FMA) or twice
+};
+
+SimdInfo simd_info();
+
+/// One line: "avx512bw, 16 float lanes, fused multiply-add".
+std::string simd_description();
+
+}  // namespace seiche::kernels

@@ -1,0 +1,73 @@
+// The SIMD layer's types and width-independent arithmetic (internal to kernels/ and neighbor/).
+//
+// Kernels are written once against these types: a batch holds kLanes floats, and every
+// width-dependent constant derives from kLanes. xsimd picks the widest instruction set the
+// compiler targets (SSE2: 4 lanes, AVX2: 8, AVX-512: 16, NEON: 4).
+//
+// Same bits on every width and every machine. A lane's arithmetic must not depend on how many
+// lanes a batch has, and every operation must round the same way on every instruction set:
+// - the basic operations, sqrt and division are correctly rounded everywhere;
+// - a multiply-add is written out as multiply_add (one fused instruction) where the kernel wants
+//   one, and `-ffp-contract=off` keeps the compiler from fusing anything else, so a multiply-add
+//   is fused on every instruction set that has FMA (x86-64-v3 and up, AArch64) and only there;
+// - no hardware reciprocal or reciprocal-square-root estimate: their precision differs between
+//   SSE/AVX (12 bits) and AVX-512 (14 bits), and between Intel and AMD for the same instruction.
+//   A kernel that needs 1/sqrt(x) divides by the correctly rounded sqrt.
+//   (xsimd 8.1's AVX-512 rsqrt does not even compile with g++ 12: it calls _mm512_rsqrt23_ps.)
+// No horizontal operation (a sum across lanes) is allowed in a kernel's arithmetic: its order
+// would depend on the width. The shuffles that need intrinsics live in shuffles.hpp, and only
+// there.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include <xsimd/xsimd.hpp>
+
+#if defined(__GNUC__)
+#define SEICHE_INLINE __attribute__((always_inline))
+#else
+#define SEICHE_INLINE
+#endif
+
+namespace seiche::simd {
+
+/// The instruction set the kernels are compiled for (an xsimd architecture tag).
+using Arch = xsimd::default_arch;
+using Floats = xsimd::batch<float, Arch>;
+using Mask = xsimd::batch_bool<float, Arch>;
+/// Unsigned 32-bit lanes, as many as Floats has (particle and constraint indices).
+using Ints = xsimd::batch<std::uint32_t, Arch>;
+using IntMask = xsimd::batch_bool<std::uint32_t, Arch>;
+inline constexpr std::size_t kLanes = Floats::size;
+static_assert(Ints::size == kLanes, "index lanes must match float lanes");
+static_assert(kLanes <= 32, "lane masks are kept in 32 bits");
+
+/// Hides where v comes from from the optimizer (an empty asm that "may change" it), so that it
+/// neither reuses values computed from it earlier nor keeps them live: for addresses that are
+/// cheaper to recompute than to keep in registers across a long computation.
+template <class T>
+SEICHE_INLINE inline void opaque(T& v) {
+#if defined(__GNUC__)
+  asm("" : "+r"(v));
+#endif
+}
+
+/// 0, 1, ..., kLanes - 1.
+inline Ints lane_index() {
+  alignas(64) std::uint32_t lanes[kLanes];
+  for (std::size_t l = 0; l < kLanes; ++l) lanes[l] = std::uint32_t(l);
+  return Ints::load_aligned(lanes);
+}
+
+// The arithmetic the kernels' math is written against.
+inline Floats vmax(const Floats& x, const Floats& y) { return xsimd::max(x, y); }
+
+/// x y + z, rounded once where the instruction set has FMA.
+inline Floats multiply_add(const Floats& x, const Floats& y, const Floats& z) { return xsimd::fma(x, y, z); }
+/// z - x y, rounded once where the instruction set has FMA.
+inline Floats mul_sub_from(const Floats& x, const Floats& y, const Floats& z) { return xsimd::fnma(x, y, z); }
+/// acc += x y, rounded once where the instruction set has FMA.
+inline void accumulate(Floats& acc, const Floats& x, const Floats& y) { acc = xsimd::fma(x, y, acc); }
+
+}  // namespace seiche::simd
