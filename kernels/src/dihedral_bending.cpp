@@ -25,9 +25,6 @@ using colored::select;
 using colored::V3;
 using simd::Floats;
 
-inline float vatan2(float y, float x) { return std::atan2(y, x); }
-inline Floats vatan2(const Floats& y, const Floats& x) { return xsimd::atan2(y, x); }
-
 /// One XPBD step of hinge(s) at positions p[0..3] = a, b, c, d: returns dlambda (0 where the
 /// hinge is skipped) and the position corrections dp[i] = w_i grad_i C dlambda (finite in every
 /// lane, 0 where skipped).
@@ -45,7 +42,7 @@ SEICHE_INLINE inline T dihedral_step(const V3<T> p[4], const T w[4], const T& re
   // Where the hinge is skipped, divide by 1 instead: every lane stays finite.
   const T e2_safe = select(ok, e2, one);
   const T len = colored::vsqrt(e2_safe);
-  T C = vatan2(dot(cross(n1, n2), e) / len, dot(n1, n2)) - rest;
+  T C = simd::atan2(dot(cross(n1, n2), e) / len, dot(n1, n2)) - rest;
   C = select(C > pi, C - two_pi, C);
   C = select(C <= -pi, C + two_pi, C);
 

@@ -64,9 +64,9 @@ SEICHE_INLINE inline PairTerms<T> pair_terms(const PairConstants& c, const T& r2
   // r and (h - r)^2 / r from the correctly rounded sqrt and division: the same bits on every
   // instruction set (a hardware 1/sqrt estimate, even refined by a Newton step, is not; see
   // seiche/simd/batch.hpp).
-  const T r = xsimd::sqrt(vmax(r2, c.r2_min));
-  const T t = vmax(c.h - r, c.zero);  // h - r, 0 past h
-  return {keep_if(r2 > c.r2_min, t * t / r), vmax(c.h2 - r2, c.zero)};
+  const T r = xsimd::sqrt(xsimd::max(r2, c.r2_min));
+  const T t = xsimd::max(c.h - r, c.zero);  // h - r, 0 past h
+  return {keep_if(r2 > c.r2_min, t * t / r), xsimd::max(c.h2 - r2, c.zero)};
 }
 
 // Offsets and squared distance from the group's particles to their slot neighbors; lanes past

@@ -1,6 +1,7 @@
 // The kernels' loop helpers over the SIMD layer (simd/: seiche/simd/batch.hpp for the types and
-// arithmetic, seiche/simd/shuffles.hpp for the record transposes), internal to kernels/: the
-// neighbor-pass loops and the streaming passes over SoA columns.
+// the rules, seiche/simd/intrinsics.hpp for the multiply-adds and the record transposes,
+// seiche/simd/math.hpp for atan2), internal to kernels/: the neighbor-pass loops and the
+// streaming passes over SoA columns.
 //
 // The neighbor passes run lane = particle: a batch holds kLanes consecutive particles (a
 // NeighborGroup), and slot k of the loop processes the k-th neighbor of each of them. The
@@ -16,11 +17,13 @@
 
 #include "seiche/kernels/particle_view.hpp"
 #include "seiche/simd/batch.hpp"
-#include "seiche/simd/shuffles.hpp"
+#include "seiche/simd/intrinsics.hpp"
+#include "seiche/simd/math.hpp"
 
 namespace seiche::kernels::simd {
 
 using seiche::simd::accumulate;
+using seiche::simd::atan2;
 using seiche::simd::Floats;
 using seiche::simd::gather4;
 using seiche::simd::Gathered4;
@@ -31,7 +34,6 @@ using seiche::simd::mul_sub_from;
 using seiche::simd::multiply_add;
 using seiche::simd::opaque;
 using seiche::simd::scatter4;
-using seiche::simd::vmax;
 
 /// kLanes consecutive particles [i0, i0 + kLanes) and their neighbor lists; lanes at or past n
 /// are padding with an empty list. Slots k < kmin are valid in every lane; slots in

@@ -2,7 +2,7 @@
 
 #include <xsimd/xsimd.hpp>
 
-#include "seiche/simd/batch.hpp"
+#include "seiche/simd/intrinsics.hpp"
 
 namespace seiche::kernels {
 

@@ -45,7 +45,7 @@
 #include <tbb/parallel_for.h>
 
 #include "seiche/simd/batch.hpp"
-#include "seiche/simd/shuffles.hpp"
+#include "seiche/simd/intrinsics.hpp"
 
 namespace seiche::neighbor {
 namespace {

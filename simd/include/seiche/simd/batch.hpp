@@ -1,4 +1,4 @@
-// The SIMD layer's types and width-independent arithmetic (internal to kernels/ and neighbor/).
+// The SIMD layer's types (internal to kernels/ and neighbor/): the rules every kernel follows.
 //
 // Kernels are written once against these types: a batch holds kLanes floats, and every
 // width-dependent constant derives from kLanes. xsimd picks the widest instruction set the
@@ -7,16 +7,19 @@
 // Same bits on every width and every machine. A lane's arithmetic must not depend on how many
 // lanes a batch has, and every operation must round the same way on every instruction set:
 // - the basic operations, sqrt and division are correctly rounded everywhere;
-// - a multiply-add is written out as multiply_add (one fused instruction) where the kernel wants
-//   one, and `-ffp-contract=off` keeps the compiler from fusing anything else, so a multiply-add
-//   is fused on every instruction set that has FMA (x86-64-v3 and up, AArch64) and only there;
+// - a multiply-add is written out as multiply_add (intrinsics.hpp) where the kernel wants one,
+//   and `-ffp-contract=off` keeps the compiler from fusing anything else, so a multiply-add is
+//   fused on every instruction set that has FMA (x86-64-v3 and up, AArch64) and only there
+//   (xsimd 8.1's own fma is not fused on AVX-512: it falls back to a multiply and an add);
+// - no xsimd math function but sqrt (its atan2, exp... use its fma, see above): atan2 is ours
+//   (math.hpp);
 // - no hardware reciprocal or reciprocal-square-root estimate: their precision differs between
 //   SSE/AVX (12 bits) and AVX-512 (14 bits), and between Intel and AMD for the same instruction.
 //   A kernel that needs 1/sqrt(x) divides by the correctly rounded sqrt.
 //   (xsimd 8.1's AVX-512 rsqrt does not even compile with g++ 12: it calls _mm512_rsqrt23_ps.)
 // No horizontal operation (a sum across lanes) is allowed in a kernel's arithmetic: its order
-// would depend on the width. The shuffles that need intrinsics live in shuffles.hpp, and only
-// there.
+// would depend on the width. What needs intrinsics (the record transposes, lane compaction, the
+// fused multiply-add) lives in intrinsics.hpp, and only there.
 #pragma once
 
 #include <cstddef>
@@ -59,15 +62,5 @@ inline Ints lane_index() {
   for (std::size_t l = 0; l < kLanes; ++l) lanes[l] = std::uint32_t(l);
   return Ints::load_aligned(lanes);
 }
-
-// The arithmetic the kernels' math is written against.
-inline Floats vmax(const Floats& x, const Floats& y) { return xsimd::max(x, y); }
-
-/// x y + z, rounded once where the instruction set has FMA.
-inline Floats multiply_add(const Floats& x, const Floats& y, const Floats& z) { return xsimd::fma(x, y, z); }
-/// z - x y, rounded once where the instruction set has FMA.
-inline Floats mul_sub_from(const Floats& x, const Floats& y, const Floats& z) { return xsimd::fnma(x, y, z); }
-/// acc += x y, rounded once where the instruction set has FMA.
-inline void accumulate(Floats& acc, const Floats& x, const Floats& y) { acc = xsimd::fma(x, y, acc); }
 
 }  // namespace seiche::simd

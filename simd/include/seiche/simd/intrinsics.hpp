@@ -1,5 +1,7 @@
-// The SIMD layer's shuffles: the only code in Seiche that uses intrinsics.
+// The SIMD layer's intrinsics: the only code in Seiche that uses them.
 //
+//   multiply_add         x y + z rounded once where the instruction set has FMA (with
+//                        mul_sub_from and accumulate, the kernels' only multiply-adds)
 //   gather4 / scatter4   kLanes 16-byte records (x, y, z, w) <-> four batches, one 16-byte load or
 //                        store per record and a transpose in registers (the neighbor passes and
 //                        the colored constraint solves; xsimd 8's gather is a scalar loop, and
@@ -15,7 +17,8 @@
 // specific version for the instruction set xsimd chose (xsimd's own dispatch idiom), never a
 // preprocessor test. The tag-specific versions are templates on the tag, so only the one chosen
 // is ever compiled; the x86 ones are declared only on x86, where the intrinsics exist.
-// None of these does arithmetic: they move bits, so they cannot change a result.
+// All but the multiply-adds only move bits, so they cannot change a result; the multiply-adds
+// round once on every instruction set with FMA, twice on those without (x86-64 baseline, AVX).
 #pragma once
 
 #include <algorithm>
@@ -54,6 +57,17 @@ SEICHE_INLINE inline float* floats_of(Record* records, std::size_t i) {
 }
 
 // ---- generic versions: any width -------------------------------------------------------------
+
+// xsimd's fma: one instruction on its FMA3 and NEON architectures, a multiply and an add where
+// the instruction set has no FMA.
+template <class A>
+SEICHE_INLINE inline Floats multiply_add(const Floats& x, const Floats& y, const Floats& z, const xsimd::generic&) {
+  return xsimd::fma(x, y, z);
+}
+template <class A>
+SEICHE_INLINE inline Floats mul_sub_from(const Floats& x, const Floats& y, const Floats& z, const xsimd::generic&) {
+  return xsimd::fnma(x, y, z);
+}
 
 template <class A, class Record, class Index>
 SEICHE_INLINE inline Gathered4 gather4(const Record* records, const Index& index, const xsimd::generic&) {
@@ -243,7 +257,18 @@ SEICHE_INLINE inline LeftPackAvx2<A> left_pack(std::uint32_t bits, const xsimd::
   return {_mm256_cvtepu8_epi32(_mm_cvtsi64_si128(std::int64_t(LeftPackAvx2<A>::kLanesOfBits[bits])))};
 }
 
-// AVX-512F: 16 lanes. Records a, b, c, d go to the four 128-bit quarters of a row; the AVX
+// AVX-512F: 16 lanes. xsimd 8.1 has no AVX-512 fma (it multiplies and adds): the instruction.
+template <class A>
+SEICHE_INLINE inline Floats multiply_add(const Floats& x, const Floats& y, const Floats& z, const xsimd::avx512f&) {
+  using F = xsimd::batch<float, A>;
+  return F(_mm512_fmadd_ps(F(x), F(y), F(z)));
+}
+template <class A>
+SEICHE_INLINE inline Floats mul_sub_from(const Floats& x, const Floats& y, const Floats& z, const xsimd::avx512f&) {
+  using F = xsimd::batch<float, A>;
+  return F(_mm512_fnmadd_ps(F(x), F(y), F(z)));
+}
+// Records a, b, c, d go to the four 128-bit quarters of a row; the AVX
 // transpose then works per quarter. Compaction is the compress instruction, to a register and
 // then stored whole (compress straight to memory is microcoded and slow on AMD Zen 4).
 template <class A, class Record, class Index>
@@ -315,6 +340,19 @@ inline void stream_copy(std::uint32_t* dst, const std::uint32_t* src, std::size_
 #endif  // SEICHE_SIMD_X86
 
 }  // namespace detail
+
+/// x y + z, rounded once where the instruction set has FMA.
+SEICHE_INLINE inline Floats multiply_add(const Floats& x, const Floats& y, const Floats& z) {
+  return detail::multiply_add<Arch>(x, y, z, Arch{});
+}
+/// z - x y, rounded once where the instruction set has FMA.
+SEICHE_INLINE inline Floats mul_sub_from(const Floats& x, const Floats& y, const Floats& z) {
+  return detail::mul_sub_from<Arch>(x, y, z, Arch{});
+}
+/// acc += x y, rounded once where the instruction set has FMA.
+SEICHE_INLINE inline void accumulate(Floats& acc, const Floats& x, const Floats& y) { acc = multiply_add(x, y, acc); }
+/// The scalar twin of multiply_add, with its rounding (for the scalar references of kernels).
+inline float multiply_add(float x, float y, float z) { return multiply_add(Floats(x), Floats(y), Floats(z)).get(0); }
 
 /// The records index(0) .. index(kLanes - 1), transposed: lane l of the result is record index(l).
 template <class Record, class Index>
