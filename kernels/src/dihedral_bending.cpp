@@ -46,14 +46,14 @@ SEICHE_INLINE inline T dihedral_step(const V3<T> p[4], const T w[4], const T& re
   C = select(C > pi, C - two_pi, C);
   C = select(C <= -pi, C + two_pi, C);
 
-  const V3<T> gc = n1 * (-len / select(ok, n1sq, one));
-  const V3<T> gd = n2 * (-len / select(ok, n2sq, one));
+  const V3<T> gc = n1 * (simd::negate(len) / select(ok, n1sq, one));
+  const V3<T> gd = n2 * (simd::negate(len) / select(ok, n2sq, one));
   const T sc = dot(ac, e) / e2_safe, sd = dot(ad, e) / e2_safe;
   const V3<T> ga = gc * (sc - one) + gd * (sd - one);
-  const V3<T> gb = gc * (-sc) - gd * sd;
+  const V3<T> gb = gc * simd::negate(sc) - gd * sd;
   const T denom =
       w[0] * dot(ga, ga) + w[1] * dot(gb, gb) + w[2] * dot(gc, gc) + w[3] * dot(gd, gd) + alpha;
-  const T dlambda = select(ok, (-C - alpha * lambda) / select(ok, denom, one), zero);
+  const T dlambda = select(ok, (simd::negate(C) - alpha * lambda) / select(ok, denom, one), zero);
   dp[0] = ga * (w[0] * dlambda);
   dp[1] = gb * (w[1] * dlambda);
   dp[2] = gc * (w[2] * dlambda);

@@ -57,10 +57,10 @@ SEICHE_INLINE inline T distance_step(const V3<T> p[2], const T w[2], const T& re
   const colored::MaskOf<T> ok = (denom > zero) & (len > T(1e-9f));
   const T C = len - rest;
   const T dlambda =
-      colored::select(ok, (-C - alpha * lambda) / colored::select(ok, denom, one), zero);
+      colored::select(ok, (simd::negate(C) - alpha * lambda) / colored::select(ok, denom, one), zero);
   const T s = dlambda / colored::select(ok, len, one);  // dlambda n = s d
   dp[0] = d * (w[0] * s);
-  dp[1] = d * (-(w[1] * s));
+  dp[1] = d * simd::negate(w[1] * s);
   return dlambda;
 }
 

@@ -32,7 +32,7 @@ SEICHE_INLINE inline T isometric_step(const V3<T> p[4], const T w[4], const T k[
   // grad_i C = k_i v / C:  sum_i w_i |grad_i C|^2 = sum_i w_i k_i^2.
   const T sum_grad2 =
       w[0] * k[0] * k[0] + w[1] * k[1] * k[1] + w[2] * k[2] * k[2] + w[3] * k[3] * k[3];
-  const T dlambda = select(ok, (-C - alpha * lambda) / select(ok, sum_grad2 + alpha, one), zero);
+  const T dlambda = select(ok, (simd::negate(C) - alpha * lambda) / select(ok, sum_grad2 + alpha, one), zero);
   const V3<T> n = v * (one / C);
   for (int i = 0; i < 4; ++i) dp[i] = n * (w[i] * k[i] * dlambda);
   return dlambda;
@@ -105,7 +105,7 @@ void solve_isometric_bending(const PackedPositions& packed, IsometricBending& b,
         // less to stream, a tenth of a hinge's bytes.
         const Floats k1 = batch.load(k_columns[1]), k2 = batch.load(k_columns[2]),
                      k3 = batch.load(k_columns[3]);
-        const Floats k[4] = {-(k1 + k2 + k3), k1, k2, k3};
+        const Floats k[4] = {simd::negate(k1 + k2 + k3), k1, k2, k3};
         const Floats dlambda = isometric_step(x, w, k, alpha, l, dp);
         batch.store(lambda, l + dlambda);
       });

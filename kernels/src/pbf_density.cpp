@@ -212,7 +212,7 @@ void pbf_density_lambda(const Float4* pos, NeighborSpan nbr, std::size_t n, cons
       const Floats denom = sx * sx + sy * sy + sz * sz +
                            Floats(grad_scale * grad_scale) * g2 + Floats(prm.epsilon);
       group.store(density, rho);
-      group.store(lambda, xsimd::select(denom > Floats(0.0f), -C / denom, Floats(0.0f)));
+      group.store(lambda, xsimd::select(denom > Floats(0.0f), negate(C) / denom, Floats(0.0f)));
     }
   });
 }

@@ -32,6 +32,7 @@ using seiche::simd::kLanes;
 using seiche::simd::Mask;
 using seiche::simd::mul_sub_from;
 using seiche::simd::multiply_add;
+using seiche::simd::negate;
 using seiche::simd::opaque;
 using seiche::simd::scatter4;
 

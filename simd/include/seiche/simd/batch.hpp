@@ -11,6 +11,9 @@
 //   and `-ffp-contract=off` keeps the compiler from fusing anything else, so a multiply-add is
 //   fused on every instruction set that has FMA (x86-64-v3 and up, AArch64) and only there
 //   (xsimd 8.1's own fma is not fused on AVX-512: it falls back to a multiply and an add);
+// - no unary minus on a batch: xsimd 8.1 computes it as 0 - x on AVX-512 (so -(+0) is +0 there
+//   and -0 everywhere else); negate() flips the sign on every instruction set, as -x does for a
+//   float;
 // - no xsimd math function but sqrt (its atan2, exp... use its fma, see above): atan2 is ours
 //   (math.hpp);
 // - no hardware reciprocal or reciprocal-square-root estimate: their precision differs between
@@ -62,5 +65,10 @@ inline Ints lane_index() {
   for (std::size_t l = 0; l < kLanes; ++l) lanes[l] = std::uint32_t(l);
   return Ints::load_aligned(lanes);
 }
+
+/// -x, the same on every instruction set: -0 - x is x with its sign flipped, zeros included.
+inline Floats negate(const Floats& x) { return Floats(-0.0f) - x; }
+/// The float twin of negate (kernels' templates run on floats as their scalar references).
+inline float negate(float x) { return -x; }
 
 }  // namespace seiche::simd

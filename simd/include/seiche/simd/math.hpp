@@ -16,6 +16,7 @@
 // of either sign gives +0 or pi: signed zeros aside, it agrees with std::atan2.
 #pragma once
 
+#include <cmath>
 #include <numbers>
 
 #include "seiche/simd/batch.hpp"
@@ -25,13 +26,15 @@ namespace seiche::simd {
 
 namespace detail {
 
+// The float twins of the batch operations atan2 uses, with their x86 semantics: abs clears the
+// sign bit, min(a, b) and max(a, b) return b unless a is strictly smaller or larger (minps, maxps).
 inline float select(bool m, float a, float b) { return m ? a : b; }
 inline Floats select(const Mask& m, const Floats& a, const Floats& b) { return xsimd::select(m, a, b); }
-inline float abs(float x) { return x < 0.0f ? -x : x; }
+inline float abs(float x) { return std::fabs(x); }
 inline Floats abs(const Floats& x) { return xsimd::abs(x); }
-inline float min(float a, float b) { return b < a ? b : a; }
+inline float min(float a, float b) { return a < b ? a : b; }
 inline Floats min(const Floats& a, const Floats& b) { return xsimd::min(a, b); }
-inline float max(float a, float b) { return a < b ? b : a; }
+inline float max(float a, float b) { return a > b ? a : b; }
 inline Floats max(const Floats& a, const Floats& b) { return xsimd::max(a, b); }
 
 }  // namespace detail
@@ -58,7 +61,7 @@ inline T atan2(const T& y, const T& x) {
   r = select(reduced, r + T(kPi / 4.0f), r);
   r = select(ay > ax, T(kPi / 2.0f) - r, r);
   r = select(x < zero, T(kPi) - r, r);
-  return select(y < zero, -r, r);
+  return select(y < zero, negate(r), r);
 }
 
 }  // namespace seiche::simd
