@@ -26,8 +26,10 @@ ci-deps:
 configure: deps
 	@cmake -S . -B $(BUILD_DIR) -G Ninja -DCMAKE_BUILD_TYPE=Release $(CMAKE_FLAGS) >/dev/null
 
+# Ends by saying what was built: the SIMD width, the compiler and the flags (seiche --version).
 build: configure
 	@cmake --build $(BUILD_DIR) -j $(JOBS)
+	@$(SEICHE) --version
 
 run: build
 	$(SEICHE) bake --out out/dam_break
