@@ -3,25 +3,33 @@
 #   make render render one baked frame with Blender (needs Debian's blender package)
 #   make test   install what is missing, build, run every test through ctest
 #   make bench  every microbenchmark, then the stability suite (seiche bench --stability)
+#   make check-widths  compile (only) the kernels for every SIMD width: SSE2, AVX2, AVX-512 and
+#               AArch64 NEON (WIDTHS="x86-64-v4 ..." for some); what CI runs before make test
 BUILD_DIR ?= build/release
 JOBS ?= $(shell nproc)
 SEICHE := $(BUILD_DIR)/apps/seiche
 CMAKE_FLAGS ?=
+WIDTHS ?=
 
 RENDER_FRAME ?= 40
 
-.PHONY: all deps configure build run test bench render clean
+.PHONY: all deps ci-deps configure build run test bench render check-widths clean
 
 all: build
 
 deps:
 	@bash scripts/install-deps.sh
 
+ci-deps:
+	@bash scripts/install-ci-deps.sh
+
 configure: deps
 	@cmake -S . -B $(BUILD_DIR) -G Ninja -DCMAKE_BUILD_TYPE=Release $(CMAKE_FLAGS) >/dev/null
 
+# Ends by saying what was built: the SIMD width, the compiler and the flags (seiche --version).
 build: configure
 	@cmake --build $(BUILD_DIR) -j $(JOBS)
+	@$(SEICHE) --version
 
 run: build
 	$(SEICHE) bake --out out/dam_break
@@ -44,6 +52,10 @@ bench: build
 	    $(BUILD_DIR)/benchmarks/$$b --benchmark_repetitions=5 --benchmark_report_aggregates_only=true || exit 1; fi; \
 	done
 	$(SEICHE) bench --stability
+
+# Builds for widths this machine may not run, so a change that breaks one fails on any machine.
+check-widths: ci-deps
+	@JOBS=$(JOBS) bash scripts/check-widths.sh $(WIDTHS)
 
 clean:
 	rm -rf build out

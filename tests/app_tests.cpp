@@ -615,3 +615,66 @@ TEST(CliBench, PlotThatCannotBeDrawnIsExitCode3AndKeepsTheCsv) {
   EXPECT_EQ(lines(slurp(out / "bench.csv")), 4u);
   EXPECT_FALSE(fs::exists(out / "bench.png"));
 }
+
+// ---- seiche --version -------------------------------------------------------------------------
+
+// What this build's -march allows, from the compiler (this test compiles with the kernels'
+// -march, SEICHE_ARCH_FLAGS), independently of xsimd and of the kernels: the widest SIMD's name,
+// float lanes, and whether it has a fused multiply-add (which the kernels then use).
+#if defined(__AVX512F__)
+constexpr const char* kTargetSimd = "avx512";
+constexpr std::size_t kTargetLanes = 16;
+#elif defined(__AVX__)
+constexpr const char* kTargetSimd = "avx";
+constexpr std::size_t kTargetLanes = 8;
+#elif defined(__SSE2__)
+constexpr const char* kTargetSimd = "sse";
+constexpr std::size_t kTargetLanes = 4;
+#elif defined(__ARM_NEON)
+constexpr const char* kTargetSimd = "neon";
+constexpr std::size_t kTargetLanes = 4;
+#else
+constexpr const char* kTargetSimd = "(a SIMD this test does not know)";
+constexpr std::size_t kTargetLanes = 0;
+#endif
+#if defined(__FMA__) || defined(__AVX512F__) || defined(__aarch64__)  // AVX-512F has its own FMA
+constexpr bool kTargetFma = true;
+#else
+constexpr bool kTargetFma = false;
+#endif
+
+// `seiche --version` says which SIMD the kernels were built for, and it is the widest the
+// build's -march allows: an AVX-512 build whose kernels ran 8 lanes would fail here. It also says
+// the compiler and the flags.
+TEST(CliVersion, PrintsTheSimdWidthCompilerAndFlagsOfTheBuild) {
+  const Result r = seiche("--version");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.out.rfind(std::string("seiche ") + SEICHE_VERSION + "\n", 0), 0u) << r.out;
+
+  // "simd: avx512bw, 16 float lanes, fused multiply-add"
+  const auto simd_at = r.out.find("\nsimd: ");
+  ASSERT_NE(simd_at, std::string::npos) << r.out;
+  const std::string simd = r.out.substr(simd_at + 7, r.out.find('\n', simd_at + 1) - simd_at - 7);
+  const std::string expected_lanes = ", " + std::to_string(kTargetLanes) + " float lanes, ";
+  const std::string expected_fma = kTargetFma ? "fused multiply-add" : "unfused multiply-add";
+  const std::string arch = simd.substr(0, simd.find(','));  // xsimd's name: "fma3+avx2", "sse2"...
+  EXPECT_NE(arch.find(kTargetSimd), std::string::npos)
+      << "the build's " << SEICHE_ARCH_FLAGS << " allows " << kTargetSimd
+      << "; seiche says: " << simd;
+  EXPECT_NE(simd.find(expected_lanes), std::string::npos)
+      << "expected \"" << expected_lanes << "\" in: " << simd;
+  EXPECT_TRUE(simd.ends_with(", " + expected_fma)) << "expected " << expected_fma << ": " << simd;
+
+#if defined(__GNUC__) && !defined(__clang__)
+  const std::string compiler = "\ncompiler: GNU " + std::to_string(__GNUC__) + "." +
+                               std::to_string(__GNUC_MINOR__) + "." +
+                               std::to_string(__GNUC_PATCHLEVEL__) + "\n";
+  EXPECT_NE(r.out.find(compiler), std::string::npos) << r.out;
+#endif
+  EXPECT_NE(r.out.find("\nbuild type: "), std::string::npos) << r.out;
+  const auto flags = r.out.find("\nflags: ");
+  ASSERT_NE(flags, std::string::npos) << r.out;
+  EXPECT_NE(r.out.find(SEICHE_ARCH_FLAGS, flags), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find(" -W", flags), std::string::npos) << "warnings are not build flags:\n"
+                                                         << r.out;
+}

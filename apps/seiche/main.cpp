@@ -29,6 +29,7 @@
 #include "seiche/bake.hpp"
 #include "seiche/bench.hpp"
 #include "seiche/cloth_obj_exporter.hpp"
+#include "seiche/kernels/simd_info.hpp"
 #include "seiche/output_files.hpp"
 #include "seiche/runner.hpp"
 #include "seiche/scene_loader.hpp"
@@ -224,11 +225,20 @@ int bake_command(const BakeArgs& a) {
   return 0;
 }
 
+// `seiche --version`: what a benchmark figure or a golden hash depends on besides the version: the
+// SIMD the kernels were built for, the compiler and the flags (from CMake, apps/CMakeLists.txt).
+std::string version_text() {
+  return fmt::format("seiche {}\nsimd: {}\ncompiler: {}\nbuild type: {}\nflags: {}", SEICHE_VERSION,
+                     seiche::kernels::simd_description(), SEICHE_COMPILER, SEICHE_BUILD_TYPE,
+                     SEICHE_BUILD_FLAGS);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"Seiche: a particle engine for fluids (Position Based Fluids, XPBD)", "seiche"};
-  app.set_version_flag("--version", std::string("seiche ") + SEICHE_VERSION);
+  app.set_version_flag("--version", version_text,
+                       "Print the version, the SIMD width, the compiler and flags, and exit");
   app.require_subcommand(1);
 
   RunArgs run;
