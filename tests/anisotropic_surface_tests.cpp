@@ -4,7 +4,6 @@
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/Interpolation.h>
 #include <openvdb/tools/LevelSetMeasure.h>
-#include <tbb/global_control.h>
 
 #include <cmath>
 #include <cstdio>
@@ -17,6 +16,7 @@
 // The headers are internal to seiche_export (core/export/src).
 #include "../core/export/src/anisotropic_surface.hpp"
 #include "../core/export/src/ellipsoid_rasterizer.hpp"
+#include "seiche/thread_count.hpp"
 
 namespace {
 
@@ -209,8 +209,7 @@ TEST(AnisotropicSurface, BitIdenticalAcrossThreadCounts) {
     particles.push_back(p + Vec3f(jitter(rng), jitter(rng), jitter(rng)));
 
   auto build = [&](int threads) {
-    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
-    return surface_of(particles);
+    return seiche::run_with_threads(threads, [&] { return surface_of(particles); });
   };
   const auto one = build(1), two = build(2);
   ASSERT_EQ(one->tree().leafCount(), two->tree().leafCount());

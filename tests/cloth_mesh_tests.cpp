@@ -2,7 +2,6 @@
 // sheets and their topology, OBJ reading and its errors, the per-frame OBJ text, and the signed
 // distance field of a closed mesh against analytic shapes and brute force.
 #include <gtest/gtest.h>
-#include <tbb/global_control.h>
 
 #include <algorithm>
 #include <array>
@@ -22,6 +21,7 @@
 #include "cloth_mesh.hpp"
 #include "mesh_sdf.hpp"
 #include "seiche/scene_loader.hpp"
+#include "seiche/thread_count.hpp"
 
 namespace seiche {
 namespace {
@@ -932,14 +932,8 @@ TEST(MeshSdf, SameBitsWithOneAndTwoThreads) {
   const ClothMesh m = icosphere(4);  // 5120 triangles
   ASSERT_EQ(m.triangles.size(), 5120u);
   MeshSdf one, two;
-  {
-    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
-    build_mesh_sdf(m, 2.2f / 64.0f, 0.05f, "scene.json", "c", one);
-  }
-  {
-    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
-    build_mesh_sdf(m, 2.2f / 64.0f, 0.05f, "scene.json", "c", two);
-  }
+  run_with_threads(1, [&] { build_mesh_sdf(m, 2.2f / 64.0f, 0.05f, "scene.json", "c", one); });
+  run_with_threads(2, [&] { build_mesh_sdf(m, 2.2f / 64.0f, 0.05f, "scene.json", "c", two); });
   ASSERT_EQ(one.values.size(), two.values.size());
   ASSERT_GT(one.values.size(), 200000u);
   EXPECT_EQ(std::memcmp(one.values.data(), two.values.data(), one.values.size() * sizeof(float)), 0);

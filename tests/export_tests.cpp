@@ -10,7 +10,6 @@
 #include <openvdb/points/PointDataGrid.h>
 #include <openvdb/tools/Interpolation.h>
 #include <openvdb/tools/LevelSetMeasure.h>
-#include <tbb/global_control.h>
 
 #include <algorithm>
 #include <array>
@@ -31,6 +30,7 @@
 #include "../core/export/src/fluid_surface.hpp"
 #include "seiche/output_files.hpp"
 #include "seiche/scene_loader.hpp"
+#include "seiche/thread_count.hpp"
 
 namespace {
 
@@ -410,14 +410,8 @@ TEST(Surface, SameBytesForAnyThreadCount) {
   FluidExportSettings s = settings(true, true, true, true);
   s.mesh = true;
   EncodedFluidFrame one, two;
-  {
-    tbb::global_control threads(tbb::global_control::max_allowed_parallelism, 1);
-    one = seiche::encode_fluid_frame(p, s, {4, 0.25});
-  }
-  {
-    tbb::global_control threads(tbb::global_control::max_allowed_parallelism, 2);
-    two = seiche::encode_fluid_frame(p, s, {4, 0.25});
-  }
+  seiche::run_with_threads(1, [&] { one = seiche::encode_fluid_frame(p, s, {4, 0.25}); });
+  seiche::run_with_threads(2, [&] { two = seiche::encode_fluid_frame(p, s, {4, 0.25}); });
   EXPECT_TRUE(one.vdb == two.vdb);
   EXPECT_TRUE(one.obj == two.obj);
 }

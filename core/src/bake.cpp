@@ -9,8 +9,6 @@
 
 #include <fmt/format.h>
 #include <fmt/ostream.h>
-#include <tbb/global_control.h>
-#include <tbb/info.h>
 
 #include <cerrno>
 #include <chrono>
@@ -24,6 +22,7 @@
 #include "seiche/output_files.hpp"
 #include "seiche/scene_loader.hpp"
 #include "seiche/simulation.hpp"
+#include "seiche/thread_count.hpp"
 
 namespace seiche {
 
@@ -216,9 +215,9 @@ void print_bake_summary(std::ostream& out, const BakeResult& r, const fs::path& 
              1e3 * r.simulate_seconds / stepped, 1e3 * r.export_seconds / stepped);
 }
 
-}  // namespace
-
-BakeResult bake_scene(const SceneDef& scene, const BakeRecipe& recipe, const BakeOptions& options) {
+// The bake itself, already on its `threads` threads (bake_scene).
+BakeResult bake_on_threads(const SceneDef& scene, const BakeRecipe& recipe,
+                           const BakeOptions& options, int threads) {
   const fs::path& dir = options.out_dir;
   if (!(1 <= recipe.first_frame && recipe.first_frame <= recipe.last_frame))
     throw std::invalid_argument(
@@ -226,9 +225,7 @@ BakeResult bake_scene(const SceneDef& scene, const BakeRecipe& recipe, const Bak
   BakeResult result;
   result.first_frame = recipe.first_frame;
   result.last_frame = recipe.last_frame;
-  result.run.threads = options.threads > 0 ? options.threads : tbb::info::default_concurrency();
-  tbb::global_control threads(tbb::global_control::max_allowed_parallelism,
-                              std::size_t(result.run.threads));
+  result.run.threads = threads;
   const std::uint64_t fingerprint = recipe.scene_fingerprint();
   const fs::path checkpoint_file = dir / kCheckpointFile;
 
@@ -358,6 +355,14 @@ BakeResult bake_scene(const SceneDef& scene, const BakeRecipe& recipe, const Bak
     print_bake_summary(*options.summary, result, dir, writer);
   }
   return result;
+}
+
+}  // namespace
+
+BakeResult bake_scene(const SceneDef& scene, const BakeRecipe& recipe, const BakeOptions& options) {
+  const int threads = resolve_thread_count(options.threads);
+  return run_with_threads(threads,
+                          [&] { return bake_on_threads(scene, recipe, options, threads); });
 }
 
 }  // namespace seiche

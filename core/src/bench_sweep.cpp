@@ -10,14 +10,13 @@
 
 #include <fmt/format.h>
 #include <fmt/ostream.h>
-#include <tbb/global_control.h>
-#include <tbb/info.h>
 
 #include "cloth_solver.hpp"
 #include "distance_solver.hpp"
 #include "implicit_reference.hpp"
 #include "progress.hpp"
 #include "seiche/simulation.hpp"
+#include "seiche/thread_count.hpp"
 #include "trajectory.hpp"
 
 namespace seiche {
@@ -242,7 +241,11 @@ const BenchRun& BenchResult::reference_check() const {
 
 void check_bench(const SceneFactory& load_scene, const BenchOptions& options) { load_sweep(load_scene, options); }
 
-BenchResult run_bench(const SceneFactory& load_scene, const BenchOptions& options) {
+namespace {
+
+// The sweep itself, already on its `threads` threads (run_bench).
+BenchResult run_bench_on_threads(const SceneFactory& load_scene, const BenchOptions& options,
+                                 int threads) {
   // Every swept scene is loaded (and so checked) before anything runs.
   const LoadedSweep sweep = load_sweep(load_scene, options);
   const std::vector<SweepAxis>& axes = sweep.axes;
@@ -256,8 +259,7 @@ BenchResult run_bench(const SceneFactory& load_scene, const BenchOptions& option
   result.scene = base.name;
   for (const SweepAxis& a : axes) result.axes.push_back(a.key);
   result.frames = options.frames > 0 ? options.frames : base.output.frames;
-  result.threads = options.threads > 0 ? options.threads : tbb::info::default_concurrency();
-  tbb::global_control threads(tbb::global_control::max_allowed_parallelism, std::size_t(result.threads));
+  result.threads = threads;
 
   const int ref_substeps = options.reference_substeps > 0 ? options.reference_substeps : std::max(64, 4 * max_substeps);
   const int ref_iterations =
@@ -332,6 +334,14 @@ BenchResult run_bench(const SceneFactory& load_scene, const BenchOptions& option
   result.runs.push_back(std::move(check));
   mark_pareto_front(result.runs);
   return result;
+}
+
+}  // namespace
+
+BenchResult run_bench(const SceneFactory& load_scene, const BenchOptions& options) {
+  const int threads = resolve_thread_count(options.threads);
+  return run_with_threads(threads,
+                          [&] { return run_bench_on_threads(load_scene, options, threads); });
 }
 
 std::string bench_csv(const BenchResult& result) {

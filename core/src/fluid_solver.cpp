@@ -69,7 +69,8 @@ void FluidSolver::solve_density(bool measure_error) {
   pack_positions(store_.px.data(), store_.py.data(), store_.pz.data());
   kernels::pbf_density_lambda(pos_.data(), neighborhood_.span(), n, params_,
                               store_.density.data(), store_.lambda.data());
-  if (measure_error) predicted_error_ = density_error().mean;
+  if (measure_error)
+    predicted_error_ = density_error(store_.density.data(), n, params_.rest_density).mean;
   const float* lambda = store_.lambda.data();
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 8192), [&](const auto& r) {
     for (std::size_t i = r.begin(); i != r.end(); ++i) pos_[i].w = lambda[i];
@@ -106,20 +107,10 @@ void FluidSolver::apply_viscosity() {
                           viscosity_, store_.vx.data(), store_.vy.data(), store_.vz.data());
 }
 
-FluidError FluidSolver::measure() {
-  if (neighborhood_.count() == 0) return {};
-  pack_positions(store_.x.data(), store_.y.data(), store_.z.data());
-  kernels::pbf_density_lambda(pos_.data(), neighborhood_.span(), neighborhood_.count(), params_,
-                              store_.density.data(), store_.lambda.data());
-  return density_error();
-}
-
-FluidError FluidSolver::density_error() const {
-  const std::size_t n = neighborhood_.count();
+FluidError density_error(const float* rho, std::size_t n, float rest_density) {
   FluidError e;
   if (n == 0) return e;
-  const float* rho = store_.density.data();
-  const float inv_rest = 1.0f / params_.rest_density;
+  const float inv_rest = 1.0f / rest_density;
   const FluidError sum = blocked_reduce(
       n, FluidError{},
       [&](std::size_t b, std::size_t end) {

@@ -20,12 +20,17 @@ namespace seiche {
 constexpr double kTensileReferenceSubstep = 1.0 / 480.0;
 double tensile_substep_scale(const SolverDef& solver);
 
+/// Mean and max of max(rho / rho0 - 1, 0) over density[0, n) (deterministic: blocked sums in
+/// index order).
+FluidError density_error(const float* density, std::size_t n, float rest_density);
+
 class FluidSolver {
  public:
   /// The domain's walls lend density to the particles next to them (pbf_walls.hpp).
   FluidSolver(const FluidDef& material, const SolverDef& solver, const DomainDef& domain,
               ParticleStore& store, const Neighborhood& neighborhood);
 
+  const kernels::PbfParams& params() const { return params_; }
   float kernel_radius() const { return params_.h; }
   float particle_mass() const { return params_.mass; }
   float particle_radius() const { return particle_radius_; }
@@ -39,15 +44,10 @@ class FluidSolver {
   double predicted_density_error() const { return predicted_error_; }
   void apply_vorticity_confinement(float dt);
   void apply_viscosity();
-  /// Density error on the current positions x (end of a frame; the neighbor lists must have
-  /// been built on them).
-  FluidError measure();
 
  private:
   void pack_positions(const float* x, const float* y, const float* z);
   void pack_velocities_and_volumes();
-  /// Mean and max of max(rho / rho0 - 1, 0) over the store's density column.
-  FluidError density_error() const;
 
   ParticleStore& store_;
   const Neighborhood& neighborhood_;

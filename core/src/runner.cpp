@@ -5,8 +5,6 @@
 
 #include <fmt/format.h>
 #include <fmt/ostream.h>
-#include <tbb/global_control.h>
-#include <tbb/info.h>
 
 #include "background_writer.hpp"
 #include "progress.hpp"
@@ -14,12 +12,16 @@
 #include "seiche/cloth_obj_exporter.hpp"
 #include "seiche/output_files.hpp"
 #include "seiche/simulation.hpp"
+#include "seiche/thread_count.hpp"
 
 namespace seiche {
 
 namespace {
 
 using Clock = std::chrono::steady_clock;
+
+// The run itself, already on its `threads` threads (run_scene).
+RunResult run_on_threads(const SceneDef& scene, const RunOptions& options, int threads);
 
 }  // namespace
 
@@ -32,10 +34,15 @@ void throw_if_diverged(const FrameMetrics& m, int frame) {
 }
 
 RunResult run_scene(const SceneDef& scene, const RunOptions& options) {
+  const int threads = resolve_thread_count(options.threads);
+  return run_with_threads(threads, [&] { return run_on_threads(scene, options, threads); });
+}
+
+namespace {
+
+RunResult run_on_threads(const SceneDef& scene, const RunOptions& options, int threads) {
   RunResult result;
-  result.threads = options.threads > 0 ? options.threads : tbb::info::default_concurrency();
-  tbb::global_control threads(tbb::global_control::max_allowed_parallelism,
-                              std::size_t(result.threads));
+  result.threads = threads;
   const int frames = options.frames > 0 ? options.frames : scene.output.frames;
 
   Simulation sim(scene);  // before any folder is made: a scene that cannot be built writes nothing
@@ -109,5 +116,7 @@ RunResult run_scene(const SceneDef& scene, const RunOptions& options) {
   }
   return result;
 }
+
+}  // namespace
 
 }  // namespace seiche

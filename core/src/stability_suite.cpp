@@ -9,12 +9,11 @@
 
 #include <fmt/format.h>
 #include <fmt/ostream.h>
-#include <tbb/global_control.h>
-#include <tbb/info.h>
 
 #include "progress.hpp"
 #include "seiche/scene_loader.hpp"
 #include "seiche/simulation.hpp"
+#include "seiche/thread_count.hpp"
 
 namespace seiche {
 
@@ -230,9 +229,10 @@ std::vector<StabilityCase> stability_cases(SuiteSize size) {
           coincident(full),       far_outside(full),       large_time_step(full), fast_sphere(full)};
 }
 
-StabilityResult run_stability_case(const StabilityCase& c, int threads, std::ostream* progress_out) {
-  const int thread_count = threads > 0 ? threads : tbb::info::default_concurrency();
-  tbb::global_control control(tbb::global_control::max_allowed_parallelism, std::size_t(thread_count));
+namespace {
+
+// One case, already on its threads (run_stability_case).
+StabilityResult run_case(const StabilityCase& c, std::ostream* progress_out) {
   StabilityResult r;
   r.name = c.name;
   r.description = c.description;
@@ -275,6 +275,13 @@ StabilityResult run_stability_case(const StabilityCase& c, int threads, std::ost
                             r.error_bound);
   r.passed = r.failure.empty();
   return r;
+}
+
+}  // namespace
+
+StabilityResult run_stability_case(const StabilityCase& c, int threads,
+                                   std::ostream* progress_out) {
+  return run_with_threads(resolve_thread_count(threads), [&] { return run_case(c, progress_out); });
 }
 
 std::string stability_csv(const std::vector<StabilityResult>& results) {

@@ -30,6 +30,7 @@ class FluidSolver;
 class DistanceSolver;
 class ClothSolver;
 class ParticleContactStage;
+class FluidErrorProbe;
 struct MeshSdf;
 struct Neighborhood;
 namespace kernels {
@@ -37,6 +38,11 @@ struct ParticleView;
 struct CollisionShape;
 struct CollisionParams;
 }  // namespace kernels
+
+/// Whether Simulation::step_frame measures the frame (FrameMetrics). Measuring never changes
+/// the simulation: a run measured every frame and one never measured have the same bits
+/// (tested); Skip only saves its time.
+enum class FrameMeasure { Full, Skip };
 
 /// What every pass sees during one substep.
 struct StepContext {
@@ -52,8 +58,10 @@ class Simulation {
   Simulation(const Simulation&) = delete;
   Simulation& operator=(const Simulation&) = delete;
 
-  /// Advances one frame (solver.substeps substeps) and returns its metrics.
-  FrameMetrics step_frame();
+  /// Advances one frame (solver.substeps substeps) and returns its metrics. With
+  /// FrameMeasure::Skip only frame, time, particles and the iteration counts are filled in (no
+  /// health check: non_finite stays 0 whatever the state).
+  FrameMetrics step_frame(FrameMeasure measure = FrameMeasure::Full);
 
   const SceneDef& scene() const { return scene_; }
   const ParticleStore& particles() const { return store_; }
@@ -107,6 +115,8 @@ class Simulation {
   void find_neighbors();
   /// Reorders the store (new k = old order[k]) and remaps every index held elsewhere.
   void reorder(std::span<const std::uint32_t> order);
+  /// The frame's constraint errors on top of state_metrics(). Reads the state and writes only
+  /// measuring scratch (fluid_probe_), so that it cannot change what the next substep computes.
   FrameMetrics measure();
 
   SceneDef scene_;
@@ -116,6 +126,7 @@ class Simulation {
 
   std::unique_ptr<Neighborhood> neighborhood_;  // null when no pass needs neighbors
   std::unique_ptr<FluidSolver> fluid_;
+  std::unique_ptr<FluidErrorProbe> fluid_probe_;  // with fluid_: the frame's density error
   std::unique_ptr<DistanceSolver> distance_;
   std::unique_ptr<ClothSolver> cloth_;
   std::unique_ptr<ParticleContactStage> contacts_;    // null unless particles of cloth can touch

@@ -1,0 +1,188 @@
+// The determinism contract (docs/design.md, "The determinism contract"), tested:
+// - the state hash is the documented FNV-1a over the state's bits in id order;
+// - any thread count gives the same bits (1, 2, 3, 5 and 8 threads, also on a 2-core machine);
+// - measuring a frame (the metrics, the report) does not change the simulation;
+// - golden hashes: the dam break, the cloth drape and the flag end in committed states, on every
+//   build and every machine (one set of values for builds with fused multiply-add, one for the
+//   x86-64 baseline build without it).
+// Every assertion compares bits or hashes; none depends on the wall clock.
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+#include <tbb/task_arena.h>
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "seiche/kernels/simd_info.hpp"
+#include "seiche/particle_store.hpp"
+#include "seiche/scene_loader.hpp"
+#include "seiche/simulation.hpp"
+#include "seiche/state_hash.hpp"
+#include "seiche/thread_count.hpp"
+
+using namespace seiche;
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path scene_path(const char* name) { return fs::path(SEICHE_SCENES_DIR) / name; }
+
+std::string hex(std::uint64_t h) { return fmt::format("0x{:016x}", h); }
+
+// The hash after `frames` frames of `scene` on `threads` threads, measured every frame or never.
+std::uint64_t hash_after(const SceneDef& scene, int frames, int threads,
+                         FrameMeasure measure = FrameMeasure::Full) {
+  return run_with_threads(threads, [&] {
+    Simulation sim(scene);
+    for (int f = 0; f < frames; ++f) sim.step_frame(measure);
+    return state_hash(sim.particles());
+  });
+}
+
+// The same hash for every thread count of the contract.
+void expect_same_hash_on_any_thread_count(const SceneDef& scene, int frames) {
+  const std::uint64_t one = hash_after(scene, frames, 1);
+  for (int threads : {2, 3, 5, 8})
+    EXPECT_EQ(hex(hash_after(scene, frames, threads)), hex(one))
+        << scene.name << " after " << frames << " frames: " << threads << " threads differ from 1";
+}
+
+// The dam break at a coarser spacing (15,625 particles, a third of the default's 50,653) for the
+// runs that repeat it: still about 60 tasks of 256 particles per PBF pass, work for 8 threads.
+SceneDef small_dam_break() {
+  return load_scene_file(scene_path("dam_break.json"),
+                         std::vector<std::string>{"fluids.0.spacing=0.04"});
+}
+
+}  // namespace
+
+// ---- The state hash ---------------------------------------------------------------------------
+
+TEST(StateHash, IsFnv1aOverTheStateBitsInIdOrder) {
+  ParticleStore empty;
+  EXPECT_EQ(hex(state_hash(empty)), hex(0xcbf29ce484222325ull));  // FNV-1a's offset basis
+
+  // Two particles stored with id 1 first: the hash reads them in id order. The literal is the
+  // definition computed independently (Python: FNV-1a 64 over struct.pack('<12f', ...)).
+  ParticleStore s;
+  s.resize(2);
+  const float by_id[2][6] = {{1.0f, 2.0f, 3.0f, 0.5f, -0.25f, 0.0f},
+                             {-0.0f, 1e-3f, -7.5f, 100.0f, 3.0e-39f, -1.0f}};
+  for (std::size_t k = 0; k < 2; ++k) {
+    const float* v = by_id[1 - k];
+    s.id[k] = std::int32_t(1 - k);
+    s.x[k] = v[0], s.y[k] = v[1], s.z[k] = v[2], s.vx[k] = v[3], s.vy[k] = v[4], s.vz[k] = v[5];
+  }
+  EXPECT_EQ(hex(state_hash(s)), hex(0xba56529a206d0022ull));
+
+  // It compares bits: +0 and -0 hash differently.
+  s.x[0] = 0.0f;
+  EXPECT_NE(hex(state_hash(s)), hex(0xba56529a206d0022ull));
+}
+
+// ---- Any thread count --------------------------------------------------------------------------
+
+TEST(Determinism, RunWithThreadsGivesTheWorkExactlyThatManyThreads) {
+  // Also past the machine's core count: the arena has that many slots and TBB may start that
+  // many workers (how many join depends on the scheduler, so this checks the arena's size).
+  for (int threads : {1, 2, 3, 5, 8})
+    EXPECT_EQ(run_with_threads(threads, [] { return tbb::this_task_arena::max_concurrency(); }),
+              threads);
+}
+
+TEST(Determinism, DamBreakIsBitIdenticalOnAnyThreadCount) {
+  expect_same_hash_on_any_thread_count(small_dam_break(), 50);
+}
+
+TEST(Determinism, ClothDrapeIsBitIdenticalOnAnyThreadCount) {
+  expect_same_hash_on_any_thread_count(load_scene_file(scene_path("cloth_drape.json")), 60);
+}
+
+TEST(Determinism, FlagIsBitIdenticalOnAnyThreadCount) {
+  expect_same_hash_on_any_thread_count(load_scene_file(scene_path("flag.json")), 60);
+}
+
+// ---- Measuring does not change the simulation ---------------------------------------------------
+
+TEST(Determinism, MeasuringTheFluidDoesNotChangeIt) {
+  // The fluid's density error needs neighbor lists on the final positions; building them must
+  // not reorder the store (which would change the order of later neighbor sums).
+  // (With the store reordered by the measuring, as it was, these hashes differ.)
+  const SceneDef scene = small_dam_break();
+  EXPECT_EQ(hex(hash_after(scene, 30, 2, FrameMeasure::Full)),
+            hex(hash_after(scene, 30, 2, FrameMeasure::Skip)));
+}
+
+TEST(Determinism, MeasuringClothOnFluidDoesNotChangeIt) {
+  const SceneDef scene = load_scene_file(scene_path("cloth_on_fluid.json"));
+  EXPECT_EQ(hex(hash_after(scene, 30, 2, FrameMeasure::Full)),
+            hex(hash_after(scene, 30, 2, FrameMeasure::Skip)));
+}
+
+// ---- Golden hashes -----------------------------------------------------------------------------
+
+namespace {
+
+// A scene's final state, committed (in the style of Box2D's test_determinism.c). Two values: a
+// build with FMA rounds every simd::multiply_add once, the x86-64 baseline build (no FMA
+// instruction: xsimd multiplies, then adds) twice. Which one a build must reproduce is read off
+// the kernels themselves (simd_info), not off the compiler flags.
+struct Golden {
+  const char* scene_file;
+  int frames;
+  std::uint64_t fused;    // x86-64-v3 and up, AVX2 or AVX-512, Intel or AMD
+  std::uint64_t unfused;  // -DSEICHE_MARCH=x86-64
+};
+
+void expect_golden(const Golden& g) {
+  const SceneDef scene = load_scene_file(scene_path(g.scene_file));
+  Simulation sim(scene);
+  for (int f = 1; f <= g.frames; ++f) ASSERT_EQ(sim.step_frame().non_finite, 0u) << "frame " << f;
+  const std::uint64_t got = state_hash(sim.particles());
+  const kernels::SimdInfo simd = kernels::simd_info();
+  const std::uint64_t expected = simd.fused_multiply_add ? g.fused : g.unfused;
+  EXPECT_EQ(hex(got), hex(expected))
+      << g.scene_file << " after " << g.frames << " frames: state hash " << hex(got)
+      << ", expected " << hex(expected) << " (the "
+      << (simd.fused_multiply_add ? "fused" : "unfused")
+      << " golden value; this build: " << kernels::simd_description() << ").\n"
+      << "Every build on every machine must reproduce these bits. If only some builds or machines "
+         "differ, do not touch the literal: find the operation whose rounding depends on the build "
+         "(docs/design.md, \"The determinism contract\"). Update the literals in "
+         "tests/determinism_tests.cpp only after a deliberate change of the physics, explained in "
+         "its commit, and update both: the fused value from a build whose description says \"fused "
+         "multiply-add\" (-DSEICHE_MARCH=x86-64-v3), the unfused one from a "
+         "-DSEICHE_MARCH=x86-64 build (this message prints each).";
+}
+
+}  // namespace
+
+// The fused values were computed by the native AVX-512 build (16 lanes) and, the same bits in
+// every frame, by the AVX2 build (-mno-avx512f, 8 lanes); the unfused ones by the x86-64
+// baseline build (SSE2, 4 lanes) and, the same bits, by an AVX2 build without FMA (-mno-fma).
+// Scenes as shipped, frames from 1, the default thread count (any other gives the same bits,
+// tested above).
+TEST(Golden, DamBreakAfter50Frames) {
+  expect_golden({"dam_break.json", 50, 0x908b4bf723248a8aull, 0x773b2e81be00c088ull});
+}
+TEST(Golden, ClothDrapeAfter120Frames) {
+  expect_golden({"cloth_drape.json", 120, 0x4af5f6b5c0fce5e9ull, 0x8d3789424195aff1ull});
+}
+TEST(Golden, FlagAfter120Frames) {
+  // Measured: the flag ends in the same bits with and without FMA.
+  expect_golden({"flag.json", 120, 0x492658500c922739ull, 0x492658500c922739ull});
+}
+
+// The golden values' premise: a build whose instruction set has FMA fuses its multiply-adds (else
+// it would compute the unfused values where the other builds of its machine class compute the
+// fused ones, and still pass the tests above). xsimd 8.1's own AVX-512 fma does not fuse;
+// simd::multiply_add therefore goes around it.
+TEST(Golden, BuildsWithFmaFuseTheirMultiplyAdds) {
+#if defined(__FMA__) || defined(__ARM_FEATURE_FMA)
+  EXPECT_TRUE(kernels::simd_info().fused_multiply_add) << kernels::simd_description();
+#else
+  EXPECT_FALSE(kernels::simd_info().fused_multiply_add) << kernels::simd_description();
+#endif
+}
