@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "seiche/bake.hpp"
+#include "seiche/kernels/simd_info.hpp"
 #include "seiche/checkpoint.hpp"
 #include "seiche/output_files.hpp"
 #include "seiche/scene_loader.hpp"
@@ -278,6 +279,30 @@ TEST(BakeRecipe, RoundTripsAndDetectsEdits) {
     EXPECT_NE(std::string(e.what()).find("bake.json"), std::string::npos) << e.what();
   }
   EXPECT_THROW(read_bake_recipe(dir / "missing"), ResumeError);
+}
+
+// A bake started by a build whose multiply-adds round differently (fused against the x86-64
+// baseline's unfused) would not continue bit for bit: its resume is refused, naming both builds.
+TEST(BakeRecipe, RefusesABakeStartedByTheOtherKindOfArithmetic) {
+  const fs::path dir = fresh_dir("recipe_arithmetic");
+  BakeRecipe r = mixed_recipe(1, 4);
+  EXPECT_EQ(r.fused_multiply_add, kernels::simd_info().fused_multiply_add);
+  EXPECT_EQ(r.simd, kernels::simd_description());
+  write_file_atomically(dir / kBakeRecipeFile, encode_bake_recipe(r));
+  EXPECT_EQ(read_bake_recipe(dir).fused_multiply_add, r.fused_multiply_add);
+
+  r.fused_multiply_add = !r.fused_multiply_add;
+  r.simd = "another build";
+  write_file_atomically(dir / kBakeRecipeFile, encode_bake_recipe(r));
+  try {
+    read_bake_recipe(dir);
+    ADD_FAILURE() << "a bake of the other arithmetic was accepted";
+  } catch (const ResumeError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("bake.json"), std::string::npos) << what;
+    EXPECT_NE(what.find("another build"), std::string::npos) << what;
+    EXPECT_NE(what.find(kernels::simd_description()), std::string::npos) << what;
+  }
 }
 
 // ---- The bake loop --------------------------------------------------------------------------

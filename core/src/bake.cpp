@@ -19,6 +19,7 @@
 
 #include "progress.hpp"
 #include "run_report.hpp"
+#include "seiche/kernels/simd_info.hpp"
 #include "seiche/output_files.hpp"
 #include "seiche/scene_loader.hpp"
 #include "seiche/simulation.hpp"
@@ -62,6 +63,8 @@ BakeRecipe make_bake_recipe(std::string scene_name, std::string scene_source,
   r.overrides = std::move(overrides);
   r.first_frame = first_frame;
   r.last_frame = last_frame;
+  r.fused_multiply_add = kernels::simd_info().fused_multiply_add;
+  r.simd = kernels::simd_description();
   return r;
 }
 
@@ -74,6 +77,8 @@ std::string encode_bake_recipe(const BakeRecipe& r) {
   doc["first_frame"] = r.first_frame;
   doc["last_frame"] = r.last_frame;
   doc["overrides"] = r.overrides;
+  doc["fused_multiply_add"] = r.fused_multiply_add;
+  doc["simd"] = r.simd;
   doc["scene_fingerprint"] = fmt::format("{:016x}", r.scene_fingerprint());
   doc["scene"] = r.scene_json;
   return doc.dump(2) + "\n";
@@ -102,6 +107,10 @@ BakeRecipe read_bake_recipe(const fs::path& dir) {
     r.overrides = doc.at("overrides").get<std::vector<std::string>>();
     r.first_frame = doc.at("first_frame").get<int>();
     r.last_frame = doc.at("last_frame").get<int>();
+    // Absent in the bakes of earlier builds: any build of this version may resume those.
+    const kernels::SimdInfo here = kernels::simd_info();
+    r.fused_multiply_add = doc.value("fused_multiply_add", here.fused_multiply_add);
+    r.simd = doc.value("simd", std::string("not recorded"));
     if (doc.at("scene_fingerprint").get<std::string>() !=
         fmt::format("{:016x}", r.scene_fingerprint()))
       throw ResumeError(
@@ -118,6 +127,15 @@ BakeRecipe read_bake_recipe(const fs::path& dir) {
         "{}: the bake was started by seiche {}, this is seiche {}: a bake continues bit "
         "for bit only with the version that started it",
         file.string(), r.seiche_version, SEICHE_VERSION));
+  if (r.fused_multiply_add != kernels::simd_info().fused_multiply_add) {
+    auto kind = [](bool fused) { return fused ? "fused (rounded once)" : "unfused (rounded twice)"; };
+    throw ResumeError(fmt::format(
+        "{}: the bake was started by a build whose multiply-adds are {} ({}); this build's are {} "
+        "({}), so it would not continue the bake bit for bit. Resume it with a build of the same "
+        "kind: -DSEICHE_MARCH=x86-64-v3 or newer for fused, -DSEICHE_MARCH=x86-64 for unfused",
+        file.string(), kind(r.fused_multiply_add), r.simd, kind(!r.fused_multiply_add),
+        kernels::simd_description()));
+  }
   return r;
 }
 

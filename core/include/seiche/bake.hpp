@@ -48,6 +48,12 @@ struct BakeRecipe {
   std::vector<std::string> overrides;  ///< --set KEY=VALUE, applied on top of scene_json
   int first_frame = 1;                 ///< frames first_frame..last_frame are written
   int last_frame = 1;
+  /// The kernels' arithmetic of the build that started the bake (kernels::simd_info): builds
+  /// whose multiply-adds are fused (x86-64-v3 and up) and those whose are not (the x86-64
+  /// baseline) compute different bits, so a resume needs the same kind (docs/design.md, "The
+  /// determinism contract"). `simd` is the starting build's description, for messages.
+  bool fused_multiply_add = true;
+  std::string simd;
 
   /// Which scene a checkpoint belongs to: FNV-1a over name, text and overrides.
   std::uint64_t scene_fingerprint() const;
