@@ -9,6 +9,7 @@
 #include <cstring>
 #include <limits>
 #include <random>
+#include <type_traits>
 #include <vector>
 
 #include "seiche/kernels/simd_info.hpp"
@@ -86,35 +87,40 @@ TEST(Simd, Scatter4WritesTheActiveLanesOnly) {
   }
 }
 
-// Every lane pattern (all 2^kLanes for up to 16 lanes): the bits of a compare, the left-packed
-// floats and indices, and keep_if.
-TEST(Simd, LaneBitsLeftPackAndKeepIfMatchTheGenericVersions) {
-  alignas(64) float values[kLanes];
-  alignas(64) std::uint32_t ids[kLanes];
-  for (std::size_t l = 0; l < kLanes; ++l) values[l] = float(l) + 0.5f, ids[l] = std::uint32_t(1000 + l);
-  const Floats v = Floats::load_aligned(values);
-  const Ints j = Ints::load_aligned(ids);
-  const std::uint32_t patterns = std::uint32_t(1) << kLanes;
+// Every lane pattern (all 2^n for n lanes, up to 16): the bits of a compare, the left-packed
+// floats and indices, and (for Arch) keep_if; for the kernels' batches (Arch) and the neighbor
+// list's (ListArch, 8 lanes in an AVX-512 build).
+template <class A>
+void check_lane_operations() {
+  using F = xsimd::batch<float, A>;
+  using I = xsimd::batch<std::uint32_t, A>;
+  constexpr std::size_t n = F::size;
+  alignas(64) float values[n];
+  alignas(64) std::uint32_t ids[n];
+  for (std::size_t l = 0; l < n; ++l) values[l] = float(l) + 0.5f, ids[l] = std::uint32_t(1000 + l);
+  const F v = F::load_aligned(values);
+  const I j = I::load_aligned(ids);
+  const std::uint32_t patterns = std::uint32_t(1) << n;
   for (std::uint32_t bits = 0; bits < patterns; ++bits) {
-    alignas(64) float threshold[kLanes];
-    alignas(64) std::uint32_t id_threshold[kLanes];
-    for (std::size_t l = 0; l < kLanes; ++l) {
+    alignas(64) float threshold[n];
+    alignas(64) std::uint32_t id_threshold[n];
+    for (std::size_t l = 0; l < n; ++l) {
       const bool set = bits >> l & 1;
       threshold[l] = set ? values[l] + 1.0f : values[l] - 1.0f;  // v < threshold where set
       id_threshold[l] = set ? ids[l] + 1 : ids[l];                // j < id_threshold where set
     }
-    const Mask m = v < Floats::load_aligned(threshold);
-    const IntMask im = j < Ints::load_aligned(id_threshold);
+    const auto m = v < F::load_aligned(threshold);
+    const auto im = j < I::load_aligned(id_threshold);
     ASSERT_EQ(lane_bits(m), bits);
-    ASSERT_EQ(lane_bits(m), detail::lane_bits<Arch>(m, xsimd::generic{}));
+    ASSERT_EQ(lane_bits(m), detail::lane_bits<A>(m, xsimd::generic{}));
     ASSERT_EQ(lane_bits(im), bits);
 
-    float packed[2 * kLanes], packed_oracle[2 * kLanes];
-    std::uint32_t packed_ids[2 * kLanes], packed_ids_oracle[2 * kLanes];
-    left_pack(bits).store(packed, v);
-    left_pack(bits).store(packed_ids, j);
-    detail::left_pack<Arch>(bits, xsimd::generic{}).store(packed_oracle, v);
-    detail::left_pack<Arch>(bits, xsimd::generic{}).store(packed_ids_oracle, j);
+    float packed[2 * n], packed_oracle[2 * n];
+    std::uint32_t packed_ids[2 * n], packed_ids_oracle[2 * n];
+    left_pack<A>(bits).store(packed, v);
+    left_pack<A>(bits).store(packed_ids, j);
+    detail::left_pack<A>(bits, xsimd::generic{}).store(packed_oracle, v);
+    detail::left_pack<A>(bits, xsimd::generic{}).store(packed_ids_oracle, j);
     const int count = std::popcount(bits);
     for (int k = 0, l = 0; k < count; ++k, ++l) {
       while (!(bits >> l & 1)) ++l;
@@ -124,13 +130,21 @@ TEST(Simd, LaneBitsLeftPackAndKeepIfMatchTheGenericVersions) {
       ASSERT_EQ(packed_ids[k], packed_ids_oracle[k]);
     }
 
-    const auto kept = lane_values(keep_if(m, v));
-    const auto kept_oracle = lane_values(detail::keep_if<Arch>(m, v, xsimd::generic{}));
-    for (std::size_t l = 0; l < kLanes; ++l) {
-      ASSERT_TRUE(same_bits(kept[l], kept_oracle[l]));
-      ASSERT_EQ(kept[l], (bits >> l & 1) ? values[l] : 0.0f);
+    if constexpr (std::is_same_v<A, Arch>) {
+      const auto kept = lane_values(keep_if(m, v));
+      const auto kept_oracle = lane_values(detail::keep_if<Arch>(m, v, xsimd::generic{}));
+      for (std::size_t l = 0; l < n; ++l) {
+        ASSERT_TRUE(same_bits(kept[l], kept_oracle[l]));
+        ASSERT_EQ(kept[l], (bits >> l & 1) ? values[l] : 0.0f);
+      }
     }
   }
+}
+
+TEST(Simd, LaneBitsLeftPackAndKeepIfMatchTheGenericVersions) { check_lane_operations<Arch>(); }
+TEST(Simd, TheNeighborListsLaneOperationsMatchTheGenericVersions) {
+  std::cout << "[ simd ] neighbor list: " << ListArch::name() << ", " << xsimd::batch<float, ListArch>::size << " lanes\n";
+  check_lane_operations<ListArch>();
 }
 
 TEST(Simd, StreamCopyCopiesEveryLengthAndAlignment) {

@@ -50,9 +50,9 @@
 namespace seiche::neighbor {
 namespace {
 
-using Batch = simd::Floats;
-using Ints = simd::Ints;
-constexpr std::size_t W = simd::kLanes;
+using Batch = xsimd::batch<float, simd::ListArch>;  // 8 lanes in an AVX-512 build (batch.hpp)
+using Ints = xsimd::batch<std::uint32_t, simd::ListArch>;
+constexpr std::size_t W = Batch::size;
 constexpr std::size_t kWaveBlocks = 32;  // blocks per wave: bounds the scratch lists
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
@@ -136,8 +136,9 @@ template <bool kSafe>
   float* const oy = o.y;
   float* const oz = o.z;
   std::uint32_t* const oj = o.j;
-  const Ints lanes = simd::lane_index();
-  for (std::uint32_t k = b; k < e; k += std::uint32_t(W)) {
+  const Ints step = Ints(std::uint32_t(W));
+  Ints j = Ints(b) + simd::lane_index<simd::ListArch>();  // the sorted indices of the W candidates
+  for (std::uint32_t k = b; k < e; k += std::uint32_t(W), j += step) {
     Batch c[3];
     if (kSafe) {
       for (int a = 0; a < 3; ++a) c[a] = Batch::load_unaligned(q[a] + k);
@@ -151,11 +152,11 @@ template <bool kSafe>
     for (int a = 0; a < 3; ++a) g[a] = xsimd::max(xsimd::max(l[a] - c[a], c[a] - h[a]), zero);
     std::uint32_t bits = simd::lane_bits(g[0] * g[0] + g[1] * g[1] + g[2] * g[2] < r2);
     if (e - k < W) bits &= (1u << (e - k)) - 1;
-    const auto pack = simd::left_pack(bits);
+    const auto pack = simd::left_pack<simd::ListArch>(bits);
     pack.store(ox + cnt, c[0]);
     pack.store(oy + cnt, c[1]);
     pack.store(oz + cnt, c[2]);
-    pack.store(oj + cnt, Ints(k) + lanes);
+    pack.store(oj + cnt, j);
     cnt += std::uint32_t(std::popcount(bits));
   }
   return cnt;
@@ -204,8 +205,8 @@ inline std::uint32_t query1(const Cand& c, const float* const p[3], std::uint32_
     const Batch dz = qz - Batch::load_unaligned(cz + k);
     const Ints j = Ints::load_unaligned(cj + k);
     const std::uint32_t bits =
-        simd::lane_bits(dx * dx + dy * dy + dz * dz < r2) & simd::lane_bits(j != self);
-    simd::left_pack(bits).store(out + count, j);
+        simd::lane_bits(dx * dx + dy * dy + dz * dz < r2) & ~simd::lane_bits(j == self);
+    simd::left_pack<simd::ListArch>(bits).store(out + count, j);
     count += std::uint32_t(std::popcount(bits));
   }
   return count;

@@ -27,6 +27,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <type_traits>
 
 #include <xsimd/xsimd.hpp>
 
@@ -59,11 +60,23 @@ SEICHE_INLINE inline void opaque(T& v) {
 #endif
 }
 
-/// 0, 1, ..., kLanes - 1.
-inline Ints lane_index() {
-  alignas(64) std::uint32_t lanes[kLanes];
-  for (std::size_t l = 0; l < kLanes; ++l) lanes[l] = std::uint32_t(l);
-  return Ints::load_aligned(lanes);
+/// The instruction set of the neighbor list's compare-and-pack loops: Arch, except in an AVX-512
+/// build, where they run on 8 lanes (AVX2 with FMA, which every AVX-512 machine has). 16 lanes do
+/// not pay there: a list is built from ~85 candidates per group and ~28 neighbors per particle, so
+/// 16 lanes pad more (96 lanes for 85 candidates, 88 with 8), every 64-byte store of packed
+/// indices straddles two cache lines, and the compare mask makes a round trip through a general
+/// register before the compress. Measured on Zen 5 (docs/performance.md, "AVX2 and AVX-512"): the
+/// grid rebuild and query took 1.01-1.05x the AVX2 build's time with 16 lanes, 1.00-1.03x with 8.
+/// The lists are integers: the same on every width.
+using ListArch = std::conditional_t<std::is_base_of_v<xsimd::avx512f, Arch>, xsimd::fma3<xsimd::avx2>, Arch>;
+
+/// 0, 1, ..., n - 1 for the n lanes of instruction set A.
+template <class A = Arch>
+inline xsimd::batch<std::uint32_t, A> lane_index() {
+  using I = xsimd::batch<std::uint32_t, A>;
+  alignas(64) std::uint32_t lanes[I::size];
+  for (std::size_t l = 0; l < I::size; ++l) lanes[l] = std::uint32_t(l);
+  return I::load_aligned(lanes);
 }
 
 /// -x, the same on every instruction set: -0 - x is x with its sign flipped, zeros included.

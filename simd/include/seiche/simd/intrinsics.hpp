@@ -94,10 +94,11 @@ SEICHE_INLINE inline void scatter4(Record* records, const Index& index, const Fl
 
 template <class A, class T>
 SEICHE_INLINE inline std::uint32_t lane_bits(const xsimd::batch_bool<T, A>& m, const xsimd::generic&) {
-  alignas(64) bool lanes[kLanes];
+  constexpr std::size_t n = xsimd::batch_bool<T, A>::size;
+  alignas(64) bool lanes[n];
   m.store_aligned(lanes);
   std::uint32_t bits = 0;
-  for (std::size_t l = 0; l < kLanes; ++l) bits |= std::uint32_t(lanes[l]) << l;
+  for (std::size_t l = 0; l < n; ++l) bits |= std::uint32_t(lanes[l]) << l;
   return bits;
 }
 
@@ -106,7 +107,7 @@ struct LeftPackGeneric {
   std::uint32_t bits;
   template <class T>
   SEICHE_INLINE void store(T* out, const xsimd::batch<T, A>& v) const {
-    alignas(64) T lanes[kLanes];
+    alignas(64) T lanes[xsimd::batch<T, A>::size];
     v.store_aligned(lanes);
     std::size_t k = 0;
     for (std::uint32_t b = bits; b != 0; b &= b - 1) out[k++] = lanes[std::countr_zero(b)];
@@ -368,13 +369,19 @@ SEICHE_INLINE inline void scatter4(Record* records, const Index& index, const Fl
   detail::scatter4<Arch>(records, index, x, y, z, w, active, Arch{});
 }
 
-/// Bit l set where lane l of the mask is.
-SEICHE_INLINE inline std::uint32_t lane_bits(const Mask& m) { return detail::lane_bits<Arch>(m, Arch{}); }
-SEICHE_INLINE inline std::uint32_t lane_bits(const IntMask& m) { return detail::lane_bits<Arch>(m, Arch{}); }
+/// Bit l set where lane l of the mask is (a mask of Arch's or of ListArch's batches).
+template <class T, class A>
+SEICHE_INLINE inline std::uint32_t lane_bits(const xsimd::batch_bool<T, A>& m) {
+  return detail::lane_bits<A>(m, A{});
+}
 
 /// The lanes selected by `bits` (bit l = lane l), stored in lane order to out[0, popcount(bits)):
-/// left_pack(bits).store(out, v). A store may write up to kLanes values at out: leave room.
-SEICHE_INLINE inline auto left_pack(std::uint32_t bits) { return detail::left_pack<Arch>(bits, Arch{}); }
+/// left_pack<A>(bits).store(out, v) for batches of instruction set A (Arch or ListArch). A store
+/// may write a whole batch at out: leave room.
+template <class A = Arch>
+SEICHE_INLINE inline auto left_pack(std::uint32_t bits) {
+  return detail::left_pack<A>(bits, A{});
+}
 
 /// v where m is set, else 0 (an AND of the compare mask: cheaper than a blend).
 SEICHE_INLINE inline Floats keep_if(const Mask& m, const Floats& v) { return detail::keep_if<Arch>(m, v, Arch{}); }
