@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Installs the Debian 12 packages Seiche builds with, and only those that are missing.
+# Installs the Debian 12 packages Seiche builds with, and only those that are missing; package
+# names given as arguments are installed too.
 # Idempotent: a machine that has everything runs no apt-get at all.
 set -euo pipefail
 
@@ -10,6 +11,7 @@ packages=(
   libgtest-dev libbenchmark-dev
   libopenvdb-dev libboost-iostreams-dev libblosc-dev
   python3 python3-matplotlib
+  "$@"  # more, for other uses (scripts/install-ci-deps.sh: the AArch64 cross compiler)
 )
 
 missing=()
