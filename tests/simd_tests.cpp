@@ -31,7 +31,9 @@ std::vector<float> lane_values(const Floats& b) {
   return out;
 }
 
-bool same_bits(float a, float b) { return std::bit_cast<std::uint32_t>(a) == std::bit_cast<std::uint32_t>(b); }
+bool same_bits(float a, float b) {
+  return std::bit_cast<std::uint32_t>(a) == std::bit_cast<std::uint32_t>(b);
+}
 
 TEST(Simd, WidthAndFusedMultiplyAddAreReported) {
   const seiche::kernels::SimdInfo info = seiche::kernels::simd_info();
@@ -81,7 +83,8 @@ TEST(Simd, Scatter4WritesTheActiveLanesOnly) {
     auto at = [&](std::size_t l) { return index[l]; };
     scatter4(fast.data(), at, x, y, z, w, active);
     detail::scatter4<Arch>(oracle.data(), at, x, y, z, w, active, xsimd::generic{});
-    ASSERT_EQ(std::memcmp(fast.data(), oracle.data(), fast.size() * sizeof(Record)), 0) << "active " << active;
+    ASSERT_EQ(std::memcmp(fast.data(), oracle.data(), fast.size() * sizeof(Record)), 0)
+        << "active " << active;
     for (std::size_t l = 0; l < active; ++l)
       for (int k = 0; k < 4; ++k) ASSERT_EQ(fast[index[l]].v[k], c[k][l]);
   }
@@ -107,7 +110,7 @@ void check_lane_operations() {
     for (std::size_t l = 0; l < n; ++l) {
       const bool set = bits >> l & 1;
       threshold[l] = set ? values[l] + 1.0f : values[l] - 1.0f;  // v < threshold where set
-      id_threshold[l] = set ? ids[l] + 1 : ids[l];                // j < id_threshold where set
+      id_threshold[l] = set ? ids[l] + 1 : ids[l];               // j < id_threshold where set
     }
     const auto m = v < F::load_aligned(threshold);
     const auto im = j < I::load_aligned(id_threshold);
@@ -143,7 +146,8 @@ void check_lane_operations() {
 
 TEST(Simd, LaneBitsLeftPackAndKeepIfMatchTheGenericVersions) { check_lane_operations<Arch>(); }
 TEST(Simd, TheNeighborListsLaneOperationsMatchTheGenericVersions) {
-  std::cout << "[ simd ] neighbor list: " << ListArch::name() << ", " << xsimd::batch<float, ListArch>::size << " lanes\n";
+  std::cout << "[ simd ] neighbor list: " << ListArch::name() << ", "
+            << xsimd::batch<float, ListArch>::size << " lanes\n";
   check_lane_operations<ListArch>();
 }
 
@@ -156,7 +160,8 @@ TEST(Simd, StreamCopyCopiesEveryLengthAndAlignment) {
       stream_copy(dst.data() + offset, src.data(), count);
       for (std::size_t k = 0; k < dst.size(); ++k) {
         const bool inside = k >= offset && k < offset + count;
-        ASSERT_EQ(dst[k], inside ? src[k - offset] : 0xdeadbeefu) << offset << " " << count << " " << k;
+        ASSERT_EQ(dst[k], inside ? src[k - offset] : 0xdeadbeefu)
+            << offset << " " << count << " " << k;
       }
     }
 }
@@ -170,9 +175,12 @@ TEST(Simd, MultiplyAddRoundsAsTheBuildSays) {
   int differ = 0;  // inputs where the fused and unfused results differ: the test has teeth
   for (int trial = 0; trial < 2000; ++trial) {
     alignas(64) float x[kLanes], y[kLanes], z[kLanes];
-    for (std::size_t l = 0; l < kLanes; ++l) x[l] = value(rng), y[l] = value(rng), z[l] = value(rng);
-    const auto r = lane_values(multiply_add(Floats::load_aligned(x), Floats::load_aligned(y), Floats::load_aligned(z)));
-    const auto s = lane_values(mul_sub_from(Floats::load_aligned(x), Floats::load_aligned(y), Floats::load_aligned(z)));
+    for (std::size_t l = 0; l < kLanes; ++l)
+      x[l] = value(rng), y[l] = value(rng), z[l] = value(rng);
+    const auto r = lane_values(
+        multiply_add(Floats::load_aligned(x), Floats::load_aligned(y), Floats::load_aligned(z)));
+    const auto s = lane_values(
+        mul_sub_from(Floats::load_aligned(x), Floats::load_aligned(y), Floats::load_aligned(z)));
     for (std::size_t l = 0; l < kLanes; ++l) {
       volatile float product = x[l] * y[l];  // rounded on its own
       const float once = std::fma(x[l], y[l], z[l]), twice = product + z[l];
@@ -208,23 +216,28 @@ TEST(Simd, Atan2IsAccurateAndTheSameForBatchesAndFloats) {
   }
   for (float t = 0.40f; t < 0.43f; t += 1e-4f) ys.push_back(t), xs.push_back(1.0f);  // tan(pi/8)
   for (float v : {1.0f, -1.0f, 1e-30f, -1e-30f, 3.0f})
-    for (float u : {0.0f, 1.0f, -1.0f, 1e30f, -1e-30f}) ys.push_back(v), xs.push_back(u), ys.push_back(u), xs.push_back(v);
+    for (float u : {0.0f, 1.0f, -1.0f, 1e30f, -1e-30f})
+      ys.push_back(v), xs.push_back(u), ys.push_back(u), xs.push_back(v);
   ys.push_back(0.0f), xs.push_back(0.0f);
   while (ys.size() % kLanes) ys.push_back(1.0f), xs.push_back(2.0f);
 
   double worst_ulps = 0.0;
   for (std::size_t i = 0; i < ys.size(); i += kLanes) {
-    const auto r = lane_values(seiche::simd::atan2(Floats::load_unaligned(&ys[i]), Floats::load_unaligned(&xs[i])));
+    const auto r = lane_values(
+        seiche::simd::atan2(Floats::load_unaligned(&ys[i]), Floats::load_unaligned(&xs[i])));
     for (std::size_t l = 0; l < kLanes; ++l) {
       const float y = ys[i + l], x = xs[i + l];
-      ASSERT_TRUE(same_bits(r[l], seiche::simd::atan2(y, x))) << y << " " << x << " lane " << l << ": " << r[l] << " vs " << seiche::simd::atan2(y, x);
+      ASSERT_TRUE(same_bits(r[l], seiche::simd::atan2(y, x)))
+          << y << " " << x << " lane " << l << ": " << r[l] << " vs " << seiche::simd::atan2(y, x);
       const double exact = std::atan2(double(y), double(x));
-      const double ulp = std::max(double(std::nextafter(std::abs(float(exact)), INFINITY)) - std::abs(float(exact)),
-                                  double(std::numeric_limits<float>::denorm_min()));
+      const double ulp = std::max(
+          double(std::nextafter(std::abs(float(exact)), INFINITY)) - std::abs(float(exact)),
+          double(std::numeric_limits<float>::denorm_min()));
       worst_ulps = std::max(worst_ulps, std::abs(double(r[l]) - exact) / ulp);
     }
   }
-  std::cout << "[ simd ] atan2: worst error " << worst_ulps << " ulp over " << ys.size() << " inputs\n";
+  std::cout << "[ simd ] atan2: worst error " << worst_ulps << " ulp over " << ys.size()
+            << " inputs\n";
   EXPECT_LT(worst_ulps, 3.0);
 }
 

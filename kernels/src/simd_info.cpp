@@ -20,9 +20,7 @@ bool multiply_add_is_fused() {
 
 }  // namespace
 
-SimdInfo simd_info() {
-  return {simd::Arch::name(), simd::kLanes, multiply_add_is_fused()};
-}
+SimdInfo simd_info() { return {simd::Arch::name(), simd::kLanes, multiply_add_is_fused()}; }
 
 std::string simd_description() {
   const SimdInfo s = simd_info();

@@ -9,7 +9,7 @@
 namespace seiche::kernels {
 
 struct SimdInfo {
-  std::string arch;         ///< xsimd's architecture name: "avx512bw", "fma3+avx2", "sse2", "neon64"
+  std::string arch;  ///< xsimd's architecture name: "avx512bw", "fma3+avx2", "sse2", "neon64"
   std::size_t float_lanes;  ///< floats per batch (a lane is a particle or a constraint)
   bool fused_multiply_add;  ///< whether the kernels' multiply-adds round once (FMA) or twice
 };

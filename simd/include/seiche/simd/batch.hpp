@@ -28,7 +28,6 @@
 #include <cstddef>
 #include <cstdint>
 #include <type_traits>
-
 #include <xsimd/xsimd.hpp>
 
 #if defined(__GNUC__)
@@ -68,7 +67,8 @@ SEICHE_INLINE inline void opaque(T& v) {
 /// register before the compress. Measured on Zen 5 (docs/performance.md, "AVX2 and AVX-512"): the
 /// grid rebuild and query took 1.01-1.05x the AVX2 build's time with 16 lanes, 1.00-1.03x with 8.
 /// The lists are integers: the same on every width.
-using ListArch = std::conditional_t<std::is_base_of_v<xsimd::avx512f, Arch>, xsimd::fma3<xsimd::avx2>, Arch>;
+using ListArch =
+    std::conditional_t<std::is_base_of_v<xsimd::avx512f, Arch>, xsimd::fma3<xsimd::avx2>, Arch>;
 
 /// 0, 1, ..., n - 1 for the n lanes of instruction set A.
 template <class A = Arch>

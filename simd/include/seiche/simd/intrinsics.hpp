@@ -61,16 +61,19 @@ SEICHE_INLINE inline float* floats_of(Record* records, std::size_t i) {
 // xsimd's fma: one instruction on its FMA3 and NEON architectures, a multiply and an add where
 // the instruction set has no FMA.
 template <class A>
-SEICHE_INLINE inline Floats multiply_add(const Floats& x, const Floats& y, const Floats& z, const xsimd::generic&) {
+SEICHE_INLINE inline Floats multiply_add(const Floats& x, const Floats& y, const Floats& z,
+                                         const xsimd::generic&) {
   return xsimd::fma(x, y, z);
 }
 template <class A>
-SEICHE_INLINE inline Floats mul_sub_from(const Floats& x, const Floats& y, const Floats& z, const xsimd::generic&) {
+SEICHE_INLINE inline Floats mul_sub_from(const Floats& x, const Floats& y, const Floats& z,
+                                         const xsimd::generic&) {
   return xsimd::fnma(x, y, z);
 }
 
 template <class A, class Record, class Index>
-SEICHE_INLINE inline Gathered4 gather4(const Record* records, const Index& index, const xsimd::generic&) {
+SEICHE_INLINE inline Gathered4 gather4(const Record* records, const Index& index,
+                                       const xsimd::generic&) {
   alignas(64) float c[4][kLanes];
   for (std::size_t l = 0; l < kLanes; ++l) {
     const float* r = floats_of(records, index(l));
@@ -81,9 +84,9 @@ SEICHE_INLINE inline Gathered4 gather4(const Record* records, const Index& index
 }
 
 template <class A, class Record, class Index>
-SEICHE_INLINE inline void scatter4(Record* records, const Index& index, const Floats& x, const Floats& y,
-                                   const Floats& z, const Floats& w, std::size_t active,
-                                   const xsimd::generic&) {
+SEICHE_INLINE inline void scatter4(Record* records, const Index& index, const Floats& x,
+                                   const Floats& y, const Floats& z, const Floats& w,
+                                   std::size_t active, const xsimd::generic&) {
   alignas(64) float c[4][kLanes];
   x.store_aligned(c[0]), y.store_aligned(c[1]), z.store_aligned(c[2]), w.store_aligned(c[3]);
   for (std::size_t l = 0; l < active; ++l) {
@@ -93,7 +96,8 @@ SEICHE_INLINE inline void scatter4(Record* records, const Index& index, const Fl
 }
 
 template <class A, class T>
-SEICHE_INLINE inline std::uint32_t lane_bits(const xsimd::batch_bool<T, A>& m, const xsimd::generic&) {
+SEICHE_INLINE inline std::uint32_t lane_bits(const xsimd::batch_bool<T, A>& m,
+                                             const xsimd::generic&) {
   constexpr std::size_t n = xsimd::batch_bool<T, A>::size;
   alignas(64) bool lanes[n];
   m.store_aligned(lanes);
@@ -124,7 +128,8 @@ SEICHE_INLINE inline Floats keep_if(const Mask& m, const Floats& v, const xsimd:
 }
 
 template <class A>
-inline void stream_copy(std::uint32_t* dst, const std::uint32_t* src, std::size_t count, const xsimd::generic&) {
+inline void stream_copy(std::uint32_t* dst, const std::uint32_t* src, std::size_t count,
+                        const xsimd::generic&) {
   std::copy_n(src, count, dst);
 }
 
@@ -135,7 +140,8 @@ inline void stream_copy(std::uint32_t* dst, const std::uint32_t* src, std::size_
 // Non-temporal copy in Bytes-wide stores: a head up to the first aligned address, the body
 // streamed, the tail copied, then a fence so later loads see the data.
 template <std::size_t Bytes, class Stream>
-inline void stream_copy_x86(std::uint32_t* dst, const std::uint32_t* src, std::size_t count, Stream stream) {
+inline void stream_copy_x86(std::uint32_t* dst, const std::uint32_t* src, std::size_t count,
+                            Stream stream) {
   constexpr std::size_t kPer = Bytes / sizeof(std::uint32_t);
   if (count < 8 * kPer) return void(std::copy_n(src, count, dst));
   const std::size_t misaligned = reinterpret_cast<std::uintptr_t>(dst) & (Bytes - 1);
@@ -150,16 +156,20 @@ inline void stream_copy_x86(std::uint32_t* dst, const std::uint32_t* src, std::s
 
 // SSE2: 4 lanes.
 template <class A, class Record, class Index>
-SEICHE_INLINE inline Gathered4 gather4(const Record* records, const Index& index, const xsimd::sse2&) {
+SEICHE_INLINE inline Gathered4 gather4(const Record* records, const Index& index,
+                                       const xsimd::sse2&) {
   using F = xsimd::batch<float, A>;
-  __m128 a = _mm_load_ps(floats_of(records, index(0))), b = _mm_load_ps(floats_of(records, index(1)));
-  __m128 c = _mm_load_ps(floats_of(records, index(2))), d = _mm_load_ps(floats_of(records, index(3)));
+  __m128 a = _mm_load_ps(floats_of(records, index(0))),
+         b = _mm_load_ps(floats_of(records, index(1)));
+  __m128 c = _mm_load_ps(floats_of(records, index(2))),
+         d = _mm_load_ps(floats_of(records, index(3)));
   _MM_TRANSPOSE4_PS(a, b, c, d);
   return {F(a), F(b), F(c), F(d)};
 }
 template <class A, class Record, class Index>
-SEICHE_INLINE inline void scatter4(Record* records, const Index& index, const Floats& x, const Floats& y,
-                                   const Floats& z, const Floats& w, std::size_t active, const xsimd::sse2&) {
+SEICHE_INLINE inline void scatter4(Record* records, const Index& index, const Floats& x,
+                                   const Floats& y, const Floats& z, const Floats& w,
+                                   std::size_t active, const xsimd::sse2&) {
   using F = xsimd::batch<float, A>;
   __m128 a = F(x), b = F(y), c = F(z), d = F(w);
   _MM_TRANSPOSE4_PS(a, b, c, d);
@@ -168,8 +178,10 @@ SEICHE_INLINE inline void scatter4(Record* records, const Index& index, const Fl
 }
 template <class A, class T>
 SEICHE_INLINE inline std::uint32_t lane_bits(const xsimd::batch_bool<T, A>& m, const xsimd::sse2&) {
-  if constexpr (std::is_same_v<T, float>) return std::uint32_t(_mm_movemask_ps(m));
-  else return std::uint32_t(_mm_movemask_ps(_mm_castsi128_ps(m)));
+  if constexpr (std::is_same_v<T, float>)
+    return std::uint32_t(_mm_movemask_ps(m));
+  else
+    return std::uint32_t(_mm_movemask_ps(_mm_castsi128_ps(m)));
 }
 template <class A>
 SEICHE_INLINE inline Floats keep_if(const Mask& m, const Floats& v, const xsimd::sse2&) {
@@ -177,16 +189,19 @@ SEICHE_INLINE inline Floats keep_if(const Mask& m, const Floats& v, const xsimd:
   return F(_mm_and_ps(xsimd::batch_bool<float, A>(m), F(v)));
 }
 template <class A>
-inline void stream_copy(std::uint32_t* dst, const std::uint32_t* src, std::size_t count, const xsimd::sse2&) {
+inline void stream_copy(std::uint32_t* dst, const std::uint32_t* src, std::size_t count,
+                        const xsimd::sse2&) {
   stream_copy_x86<16>(dst, src, count, [](std::uint32_t* d, const std::uint32_t* s) {
-    _mm_stream_si128(reinterpret_cast<__m128i*>(d), _mm_loadu_si128(reinterpret_cast<const __m128i*>(s)));
+    _mm_stream_si128(reinterpret_cast<__m128i*>(d),
+                     _mm_loadu_si128(reinterpret_cast<const __m128i*>(s)));
   });
 }
 
 // AVX: 8 lanes. Records a and b go to the low and high 128-bit halves of a row; a 4 x 4
 // transpose per half then gives lanes 0-3 and 4-7.
 template <class A, class Record, class Index>
-SEICHE_INLINE inline Gathered4 gather4(const Record* records, const Index& index, const xsimd::avx&) {
+SEICHE_INLINE inline Gathered4 gather4(const Record* records, const Index& index,
+                                       const xsimd::avx&) {
   using F = xsimd::batch<float, A>;
   auto row = [&](std::size_t a, std::size_t b) {
     return _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_load_ps(floats_of(records, index(a)))),
@@ -197,12 +212,15 @@ SEICHE_INLINE inline Gathered4 gather4(const Record* records, const Index& index
   const __m256 t1 = _mm256_unpackhi_ps(r04, r15);  // z0 z1 w0 w1 | z4 z5 w4 w5
   const __m256 t2 = _mm256_unpacklo_ps(r26, r37);  // x2 x3 y2 y3 | x6 x7 y6 y7
   const __m256 t3 = _mm256_unpackhi_ps(r26, r37);  // z2 z3 w2 w3 | z6 z7 w6 w7
-  return {F(_mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(1, 0, 1, 0))), F(_mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(3, 2, 3, 2))),
-          F(_mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(1, 0, 1, 0))), F(_mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(3, 2, 3, 2)))};
+  return {F(_mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(1, 0, 1, 0))),
+          F(_mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(3, 2, 3, 2))),
+          F(_mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(1, 0, 1, 0))),
+          F(_mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(3, 2, 3, 2)))};
 }
 template <class A, class Record, class Index>
-SEICHE_INLINE inline void scatter4(Record* records, const Index& index, const Floats& x, const Floats& y,
-                                   const Floats& z, const Floats& w, std::size_t active, const xsimd::avx&) {
+SEICHE_INLINE inline void scatter4(Record* records, const Index& index, const Floats& x,
+                                   const Floats& y, const Floats& z, const Floats& w,
+                                   std::size_t active, const xsimd::avx&) {
   using F = xsimd::batch<float, A>;
   const __m256 t0 = _mm256_unpacklo_ps(F(x), F(y));  // x0 y0 x1 y1 | x4 y4 x5 y5
   const __m256 t1 = _mm256_unpackhi_ps(F(x), F(y));  // x2 y2 x3 y3 | x6 y6 x7 y7
@@ -219,8 +237,10 @@ SEICHE_INLINE inline void scatter4(Record* records, const Index& index, const Fl
 }
 template <class A, class T>
 SEICHE_INLINE inline std::uint32_t lane_bits(const xsimd::batch_bool<T, A>& m, const xsimd::avx&) {
-  if constexpr (std::is_same_v<T, float>) return std::uint32_t(_mm256_movemask_ps(m));
-  else return std::uint32_t(_mm256_movemask_ps(_mm256_castsi256_ps(m)));
+  if constexpr (std::is_same_v<T, float>)
+    return std::uint32_t(_mm256_movemask_ps(m));
+  else
+    return std::uint32_t(_mm256_movemask_ps(_mm256_castsi256_ps(m)));
 }
 template <class A>
 SEICHE_INLINE inline Floats keep_if(const Mask& m, const Floats& v, const xsimd::avx&) {
@@ -228,9 +248,11 @@ SEICHE_INLINE inline Floats keep_if(const Mask& m, const Floats& v, const xsimd:
   return F(_mm256_and_ps(xsimd::batch_bool<float, A>(m), F(v)));
 }
 template <class A>
-inline void stream_copy(std::uint32_t* dst, const std::uint32_t* src, std::size_t count, const xsimd::avx&) {
+inline void stream_copy(std::uint32_t* dst, const std::uint32_t* src, std::size_t count,
+                        const xsimd::avx&) {
   stream_copy_x86<32>(dst, src, count, [](std::uint32_t* d, const std::uint32_t* s) {
-    _mm256_stream_si256(reinterpret_cast<__m256i*>(d), _mm256_loadu_si256(reinterpret_cast<const __m256i*>(s)));
+    _mm256_stream_si256(reinterpret_cast<__m256i*>(d),
+                        _mm256_loadu_si256(reinterpret_cast<const __m256i*>(s)));
   });
 }
 
@@ -255,17 +277,20 @@ struct LeftPackAvx2 {
 };
 template <class A>
 SEICHE_INLINE inline LeftPackAvx2<A> left_pack(std::uint32_t bits, const xsimd::avx2&) {
-  return {_mm256_cvtepu8_epi32(_mm_cvtsi64_si128(std::int64_t(LeftPackAvx2<A>::kLanesOfBits[bits])))};
+  return {
+      _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(std::int64_t(LeftPackAvx2<A>::kLanesOfBits[bits])))};
 }
 
 // AVX-512F: 16 lanes. xsimd 8.1 has no AVX-512 fma (it multiplies and adds): the instruction.
 template <class A>
-SEICHE_INLINE inline Floats multiply_add(const Floats& x, const Floats& y, const Floats& z, const xsimd::avx512f&) {
+SEICHE_INLINE inline Floats multiply_add(const Floats& x, const Floats& y, const Floats& z,
+                                         const xsimd::avx512f&) {
   using F = xsimd::batch<float, A>;
   return F(_mm512_fmadd_ps(F(x), F(y), F(z)));
 }
 template <class A>
-SEICHE_INLINE inline Floats mul_sub_from(const Floats& x, const Floats& y, const Floats& z, const xsimd::avx512f&) {
+SEICHE_INLINE inline Floats mul_sub_from(const Floats& x, const Floats& y, const Floats& z,
+                                         const xsimd::avx512f&) {
   using F = xsimd::batch<float, A>;
   return F(_mm512_fnmadd_ps(F(x), F(y), F(z)));
 }
@@ -273,7 +298,8 @@ SEICHE_INLINE inline Floats mul_sub_from(const Floats& x, const Floats& y, const
 // transpose then works per quarter. Compaction is the compress instruction, to a register and
 // then stored whole (compress straight to memory is microcoded and slow on AMD Zen 4).
 template <class A, class Record, class Index>
-SEICHE_INLINE inline Gathered4 gather4(const Record* records, const Index& index, const xsimd::avx512f&) {
+SEICHE_INLINE inline Gathered4 gather4(const Record* records, const Index& index,
+                                       const xsimd::avx512f&) {
   using F = xsimd::batch<float, A>;
   auto row = [&](std::size_t a) {  // records a, a + 4, a + 8, a + 12
     __m512 r = _mm512_castps128_ps512(_mm_load_ps(floats_of(records, index(a))));
@@ -284,12 +310,15 @@ SEICHE_INLINE inline Gathered4 gather4(const Record* records, const Index& index
   const __m512 r0 = row(0), r1 = row(1), r2 = row(2), r3 = row(3);
   const __m512 t0 = _mm512_unpacklo_ps(r0, r1), t1 = _mm512_unpackhi_ps(r0, r1);
   const __m512 t2 = _mm512_unpacklo_ps(r2, r3), t3 = _mm512_unpackhi_ps(r2, r3);
-  return {F(_mm512_shuffle_ps(t0, t2, _MM_SHUFFLE(1, 0, 1, 0))), F(_mm512_shuffle_ps(t0, t2, _MM_SHUFFLE(3, 2, 3, 2))),
-          F(_mm512_shuffle_ps(t1, t3, _MM_SHUFFLE(1, 0, 1, 0))), F(_mm512_shuffle_ps(t1, t3, _MM_SHUFFLE(3, 2, 3, 2)))};
+  return {F(_mm512_shuffle_ps(t0, t2, _MM_SHUFFLE(1, 0, 1, 0))),
+          F(_mm512_shuffle_ps(t0, t2, _MM_SHUFFLE(3, 2, 3, 2))),
+          F(_mm512_shuffle_ps(t1, t3, _MM_SHUFFLE(1, 0, 1, 0))),
+          F(_mm512_shuffle_ps(t1, t3, _MM_SHUFFLE(3, 2, 3, 2)))};
 }
 template <class A, class Record, class Index>
-SEICHE_INLINE inline void scatter4(Record* records, const Index& index, const Floats& x, const Floats& y,
-                                   const Floats& z, const Floats& w, std::size_t active, const xsimd::avx512f&) {
+SEICHE_INLINE inline void scatter4(Record* records, const Index& index, const Floats& x,
+                                   const Floats& y, const Floats& z, const Floats& w,
+                                   std::size_t active, const xsimd::avx512f&) {
   using F = xsimd::batch<float, A>;
   const __m512 t0 = _mm512_unpacklo_ps(F(x), F(y)), t1 = _mm512_unpackhi_ps(F(x), F(y));
   const __m512 t2 = _mm512_unpacklo_ps(F(z), F(w)), t3 = _mm512_unpackhi_ps(F(z), F(w));
@@ -308,7 +337,8 @@ SEICHE_INLINE inline void scatter4(Record* records, const Index& index, const Fl
   }
 }
 template <class A, class T>
-SEICHE_INLINE inline std::uint32_t lane_bits(const xsimd::batch_bool<T, A>& m, const xsimd::avx512f&) {
+SEICHE_INLINE inline std::uint32_t lane_bits(const xsimd::batch_bool<T, A>& m,
+                                             const xsimd::avx512f&) {
   static_assert(sizeof(T) == 4);
   return std::uint32_t(__mmask16(m));  // already a mask register
 }
@@ -332,7 +362,8 @@ SEICHE_INLINE inline Floats keep_if(const Mask& m, const Floats& v, const xsimd:
   return F(_mm512_maskz_mov_ps(xsimd::batch_bool<float, A>(m), F(v)));
 }
 template <class A>
-inline void stream_copy(std::uint32_t* dst, const std::uint32_t* src, std::size_t count, const xsimd::avx512f&) {
+inline void stream_copy(std::uint32_t* dst, const std::uint32_t* src, std::size_t count,
+                        const xsimd::avx512f&) {
   stream_copy_x86<64>(dst, src, count, [](std::uint32_t* d, const std::uint32_t* s) {
     _mm512_stream_si512(reinterpret_cast<__m512i*>(d), _mm512_loadu_si512(s));
   });
@@ -351,9 +382,13 @@ SEICHE_INLINE inline Floats mul_sub_from(const Floats& x, const Floats& y, const
   return detail::mul_sub_from<Arch>(x, y, z, Arch{});
 }
 /// acc += x y, rounded once where the instruction set has FMA.
-SEICHE_INLINE inline void accumulate(Floats& acc, const Floats& x, const Floats& y) { acc = multiply_add(x, y, acc); }
+SEICHE_INLINE inline void accumulate(Floats& acc, const Floats& x, const Floats& y) {
+  acc = multiply_add(x, y, acc);
+}
 /// The scalar twin of multiply_add, with its rounding (for the scalar references of kernels).
-inline float multiply_add(float x, float y, float z) { return multiply_add(Floats(x), Floats(y), Floats(z)).get(0); }
+inline float multiply_add(float x, float y, float z) {
+  return multiply_add(Floats(x), Floats(y), Floats(z)).get(0);
+}
 
 /// The records index(0) .. index(kLanes - 1), transposed: lane l of the result is record index(l).
 template <class Record, class Index>
@@ -364,8 +399,9 @@ SEICHE_INLINE inline Gathered4 gather4(const Record* records, const Index& index
 /// Writes lane l of (x, y, z, w) to records[index(l)] for l < active: the transpose of gather4,
 /// one 16-byte store per record.
 template <class Record, class Index>
-SEICHE_INLINE inline void scatter4(Record* records, const Index& index, const Floats& x, const Floats& y,
-                                   const Floats& z, const Floats& w, std::size_t active = kLanes) {
+SEICHE_INLINE inline void scatter4(Record* records, const Index& index, const Floats& x,
+                                   const Floats& y, const Floats& z, const Floats& w,
+                                   std::size_t active = kLanes) {
   detail::scatter4<Arch>(records, index, x, y, z, w, active, Arch{});
 }
 
@@ -384,7 +420,9 @@ SEICHE_INLINE inline auto left_pack(std::uint32_t bits) {
 }
 
 /// v where m is set, else 0 (an AND of the compare mask: cheaper than a blend).
-SEICHE_INLINE inline Floats keep_if(const Mask& m, const Floats& v) { return detail::keep_if<Arch>(m, v, Arch{}); }
+SEICHE_INLINE inline Floats keep_if(const Mask& m, const Floats& v) {
+  return detail::keep_if<Arch>(m, v, Arch{});
+}
 
 /// dst[0, count) = src[0, count), with stores that bypass the caches where the instruction set
 /// has them: for outputs far larger than the caches (they skip reading the destination in first,

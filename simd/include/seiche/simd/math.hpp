@@ -29,7 +29,9 @@ namespace detail {
 // The float twins of the batch operations atan2 uses, with their x86 semantics: abs clears the
 // sign bit, min(a, b) and max(a, b) return b unless a is strictly smaller or larger (minps, maxps).
 inline float select(bool m, float a, float b) { return m ? a : b; }
-inline Floats select(const Mask& m, const Floats& a, const Floats& b) { return xsimd::select(m, a, b); }
+inline Floats select(const Mask& m, const Floats& a, const Floats& b) {
+  return xsimd::select(m, a, b);
+}
 inline float abs(float x) { return std::fabs(x); }
 inline Floats abs(const Floats& x) { return xsimd::abs(x); }
 inline float min(float a, float b) { return a < b ? a : b; }
