@@ -20,6 +20,8 @@
 #include <thread>
 #include <vector>
 
+#include "target_simd.hpp"
+
 namespace fs = std::filesystem;
 
 namespace {
@@ -640,30 +642,11 @@ TEST(CliBench, PlotThatCannotBeDrawnIsExitCode3AndKeepsTheCsv) {
 
 // ---- seiche --version -------------------------------------------------------------------------
 
-// What this build's -march allows, from the compiler (this test compiles with the kernels'
-// -march, SEICHE_ARCH_FLAGS), independently of xsimd and of the kernels: the widest SIMD's name,
-// float lanes, and whether it has a fused multiply-add (which the kernels then use).
-#if defined(__AVX512F__)
-constexpr const char* kTargetSimd = "avx512";
-constexpr std::size_t kTargetLanes = 16;
-#elif defined(__AVX__)
-constexpr const char* kTargetSimd = "avx";
-constexpr std::size_t kTargetLanes = 8;
-#elif defined(__SSE2__)
-constexpr const char* kTargetSimd = "sse";
-constexpr std::size_t kTargetLanes = 4;
-#elif defined(__ARM_NEON)
-constexpr const char* kTargetSimd = "neon";
-constexpr std::size_t kTargetLanes = 4;
-#else
-constexpr const char* kTargetSimd = "(a SIMD this test does not know)";
-constexpr std::size_t kTargetLanes = 0;
-#endif
-#if defined(__FMA__) || defined(__AVX512F__) || defined(__aarch64__)  // AVX-512F has its own FMA
-constexpr bool kTargetFma = true;
-#else
-constexpr bool kTargetFma = false;
-#endif
+// What this build's -march allows (this test compiles with the kernels' -march,
+// SEICHE_ARCH_FLAGS): tests/target_simd.hpp.
+using target_simd::kTargetFma;
+using target_simd::kTargetLanes;
+using target_simd::kTargetSimd;
 
 // `seiche --version` says which SIMD the kernels were built for, and it is the widest the
 // build's -march allows: an AVX-512 build whose kernels ran 8 lanes would fail here. It also says

@@ -291,6 +291,19 @@ TEST(BakeRecipe, RefusesABakeStartedByTheOtherKindOfArithmetic) {
   write_file_atomically(dir / kBakeRecipeFile, encode_bake_recipe(r));
   EXPECT_EQ(read_bake_recipe(dir).fused_multiply_add, r.fused_multiply_add);
 
+  BakeRecipe other_family = r;
+  other_family.family = "another family";
+  other_family.simd = "another build";
+  write_file_atomically(dir / kBakeRecipeFile, encode_bake_recipe(other_family));
+  try {
+    read_bake_recipe(dir);
+    ADD_FAILURE() << "a bake of another CPU family was accepted";
+  } catch (const ResumeError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("another family"), std::string::npos) << what;
+    EXPECT_NE(what.find(kernels::simd_info().family), std::string::npos) << what;
+  }
+
   r.fused_multiply_add = !r.fused_multiply_add;
   r.simd = "another build";
   write_file_atomically(dir / kBakeRecipeFile, encode_bake_recipe(r));

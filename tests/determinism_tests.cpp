@@ -8,11 +8,17 @@
 // Every assertion compares bits or hashes; none depends on the wall clock.
 #include <fmt/format.h>
 #include <gtest/gtest.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/partitioner.h>
 #include <tbb/task_arena.h>
 
+#include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <filesystem>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "seiche/kernels/simd_info.hpp"
@@ -21,6 +27,7 @@
 #include "seiche/simulation.hpp"
 #include "seiche/state_hash.hpp"
 #include "seiche/thread_count.hpp"
+#include "target_simd.hpp"
 
 using namespace seiche;
 namespace fs = std::filesystem;
@@ -84,12 +91,27 @@ TEST(StateHash, IsFnv1aOverTheStateBitsInIdOrder) {
 
 // ---- Any thread count --------------------------------------------------------------------------
 
-TEST(Determinism, RunWithThreadsGivesTheWorkExactlyThatManyThreads) {
-  // Also past the machine's core count: the arena has that many slots and TBB may start that
-  // many workers (how many join depends on the scheduler, so this checks the arena's size).
-  for (int threads : {1, 2, 3, 5, 8})
-    EXPECT_EQ(run_with_threads(threads, [] { return tbb::this_task_arena::max_concurrency(); }),
-              threads);
+// T tasks that each wait for all T to have started can only all finish their wait when T
+// threads run them at once; with fewer threads the first ones give up at a deadline (10 s, only
+// reached when the test fails). Also past the machine's core count: 8 threads on 2 cores.
+TEST(Determinism, RunWithThreadsRunsThatManyThreadsAtOnce) {
+  for (int threads : {1, 2, 3, 5, 8}) {
+    std::atomic<int> started{0}, met_all{0};
+    run_with_threads(threads, [&] {
+      EXPECT_EQ(tbb::this_task_arena::max_concurrency(), threads);
+      tbb::parallel_for(
+          tbb::blocked_range<int>(0, threads, 1),
+          [&](const tbb::blocked_range<int>&) {
+            started.fetch_add(1);
+            const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+            while (started.load() < threads && std::chrono::steady_clock::now() < deadline)
+              std::this_thread::yield();
+            if (started.load() == threads) met_all.fetch_add(1);
+          },
+          tbb::simple_partitioner());
+    });
+    EXPECT_EQ(met_all.load(), threads) << threads << " threads did not all run at once";
+  }
 }
 
 TEST(Determinism, DamBreakIsBitIdenticalOnAnyThreadCount) {
@@ -180,9 +202,5 @@ TEST(Golden, FlagAfter120Frames) {
 // fused ones, and still pass the tests above). xsimd 8.1's own AVX-512 fma does not fuse;
 // simd::multiply_add therefore goes around it.
 TEST(Golden, BuildsWithFmaFuseTheirMultiplyAdds) {
-#if defined(__FMA__) || defined(__ARM_FEATURE_FMA)
-  EXPECT_TRUE(kernels::simd_info().fused_multiply_add) << kernels::simd_description();
-#else
-  EXPECT_FALSE(kernels::simd_info().fused_multiply_add) << kernels::simd_description();
-#endif
+  EXPECT_EQ(kernels::simd_info().fused_multiply_add, target_simd::kTargetFma) << kernels::simd_description();
 }

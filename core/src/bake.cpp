@@ -63,7 +63,9 @@ BakeRecipe make_bake_recipe(std::string scene_name, std::string scene_source,
   r.overrides = std::move(overrides);
   r.first_frame = first_frame;
   r.last_frame = last_frame;
-  r.fused_multiply_add = kernels::simd_info().fused_multiply_add;
+  const kernels::SimdInfo simd = kernels::simd_info();
+  r.family = simd.family;
+  r.fused_multiply_add = simd.fused_multiply_add;
   r.simd = kernels::simd_description();
   return r;
 }
@@ -77,6 +79,7 @@ std::string encode_bake_recipe(const BakeRecipe& r) {
   doc["first_frame"] = r.first_frame;
   doc["last_frame"] = r.last_frame;
   doc["overrides"] = r.overrides;
+  doc["family"] = r.family;
   doc["fused_multiply_add"] = r.fused_multiply_add;
   doc["simd"] = r.simd;
   doc["scene_fingerprint"] = fmt::format("{:016x}", r.scene_fingerprint());
@@ -107,10 +110,9 @@ BakeRecipe read_bake_recipe(const fs::path& dir) {
     r.overrides = doc.at("overrides").get<std::vector<std::string>>();
     r.first_frame = doc.at("first_frame").get<int>();
     r.last_frame = doc.at("last_frame").get<int>();
-    // Absent in the bakes of earlier builds: any build of this version may resume those.
-    const kernels::SimdInfo here = kernels::simd_info();
-    r.fused_multiply_add = doc.value("fused_multiply_add", here.fused_multiply_add);
-    r.simd = doc.value("simd", std::string("not recorded"));
+    r.family = doc.at("family").get<std::string>();
+    r.fused_multiply_add = doc.at("fused_multiply_add").get<bool>();
+    r.simd = doc.at("simd").get<std::string>();
     if (doc.at("scene_fingerprint").get<std::string>() !=
         fmt::format("{:016x}", r.scene_fingerprint()))
       throw ResumeError(
@@ -127,7 +129,13 @@ BakeRecipe read_bake_recipe(const fs::path& dir) {
         "{}: the bake was started by seiche {}, this is seiche {}: a bake continues bit "
         "for bit only with the version that started it",
         file.string(), r.seiche_version, SEICHE_VERSION));
-  if (r.fused_multiply_add != kernels::simd_info().fused_multiply_add) {
+  const kernels::SimdInfo here = kernels::simd_info();
+  if (r.family != here.family)
+    throw ResumeError(fmt::format(
+        "{}: the bake was started on a {} build ({}); this is a {} build ({}): the two compute "
+        "different bits, so it would not continue the bake bit for bit. Resume it with a {} build",
+        file.string(), r.family, r.simd, here.family, kernels::simd_description(), r.family));
+  if (r.fused_multiply_add != here.fused_multiply_add) {
     auto kind = [](bool fused) { return fused ? "fused (rounded once)" : "unfused (rounded twice)"; };
     throw ResumeError(fmt::format(
         "{}: the bake was started by a build whose multiply-adds are {} ({}); this build's are {} "

@@ -15,6 +15,7 @@
 #include "distance_solver.hpp"
 #include "implicit_reference.hpp"
 #include "progress.hpp"
+#include "seiche/kernels/simd_info.hpp"
 #include "seiche/simulation.hpp"
 #include "seiche/thread_count.hpp"
 #include "trajectory.hpp"
@@ -368,7 +369,8 @@ std::string bench_csv(const BenchResult& result) {
 
 void print_bench_table(std::ostream& out, const BenchResult& result) {
   const BenchRun& check = result.reference_check();
-  fmt::print(out, "\n{}: {} frames, {} particles, {} threads\n", result.scene, result.frames, result.particles,
+  fmt::print(out, "\nsimd: {}\n", kernels::simd_description());
+  fmt::print(out, "{}: {} frames, {} particles, {} threads\n", result.scene, result.frames, result.particles,
              result.threads);
   fmt::print(out, "error: the particle positions' difference to the reference over every frame, in units of {} ({:.4g} m)\n",
              result.spacing_source, result.spacing);

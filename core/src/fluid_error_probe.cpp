@@ -17,12 +17,7 @@ FluidErrorProbe::FluidErrorProbe(const kernels::PbfParams& params, const neighbo
 FluidError FluidErrorProbe::measure(const ParticleStore& store) {
   const std::size_t n = store.size();
   Neighborhood& nb = scratch_;
-  nb.in_grid.resize(n);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 16384), [&](const auto& r) {
-    for (std::size_t i = r.begin(); i != r.end(); ++i)
-      nb.in_grid[i] = phase_material(store.phase[i]) == Material::Fluid ? 1 : 0;
-  });
-  nb.grid.build(nb.spec, store.x.data(), store.y.data(), store.z.data(), nb.in_grid.data(), n);
+  nb.build_grid(store.x.data(), store.y.data(), store.z.data(), store.phase.data(), n);
   // order() puts the fluid first, [0, count()); the lists want every particle's sorted position.
   const std::size_t fluid = nb.count();
   if (fluid == 0) return {};

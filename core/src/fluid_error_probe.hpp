@@ -6,9 +6,9 @@
 // positions. Building them with the simulation's neighbor stage would sort the store into the
 // cell order of those positions: measuring would change the particle order, with it the order
 // of every later neighbor sum, and so the later bits (a run with a report would differ from one
-// without). The probe therefore owns everything it writes: a grid and neighbor lists over a
-// sorted copy of the fluid's positions, the packed positions and density and lambda buffers. It
-// only reads the store.
+// without). The probe therefore owns everything it writes: a grid and neighbor lists over a copy
+// of the positions (every particle's, in the grid's order: the fluid first, in cell order), the
+// packed positions and density and lambda buffers. It only reads the store.
 //
 // The copy is sorted by a stable counting sort of the store's current order, the very order
 // the simulation's own neighbor stage would have produced: the density of every particle, and
@@ -38,7 +38,7 @@ class FluidErrorProbe {
  private:
   kernels::PbfParams params_;
   Neighborhood scratch_;                 // grid and lists over the sorted copy
-  AlignedColumn<float> x_, y_, z_;       // the fluid's positions in cell order
+  AlignedColumn<float> x_, y_, z_;       // every particle's position, in the grid's order
   std::vector<kernels::Float4> packed_;  // (x, y, z, -) for the density kernel
   AlignedColumn<float> density_, lambda_;
 };

@@ -3,6 +3,7 @@
 // those particles are store indices [0, count()).
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -20,6 +21,9 @@ struct Neighborhood {
   std::vector<std::uint8_t> in_grid;   ///< per particle, rebuilt every substep
 
   std::size_t count() const { return grid.num_in_grid(); }
+  /// Builds the grid over positions (x, y, z) of `phase`'s n particles; the fluid particles take
+  /// part (in_grid), the others are sorted after them.
+  void build_grid(const float* x, const float* y, const float* z, const std::uint32_t* phase, std::size_t n);
   kernels::NeighborSpan span() const { return {list.offsets.data(), list.indices.data()}; }
 };
 

@@ -6,6 +6,8 @@
 
 #include <algorithm>
 
+#include "seiche/kernels/simd_info.hpp"
+
 namespace seiche {
 
 Progress::Progress(std::ostream* out, int last_frame)
@@ -39,7 +41,8 @@ void print_run_summary(std::ostream& out, const SceneDef& scene, const RunResult
              "\n{}: {} frames, {} particles, {} substeps x {} iterations, {} threads, {:.2f} s\n",
              scene.name, r.frames, r.particles, scene.solver.substeps, scene.solver.iterations,
              r.threads, r.wall_seconds);
-  fmt::print(out, "pipeline: {}\n\n", fmt::join(pipeline, " -> "));
+  fmt::print(out, "pipeline: {}\n", fmt::join(pipeline, " -> "));
+  fmt::print(out, "simd: {}\n\n", kernels::simd_description());
   double total = 0.0;
   for (const auto& e : r.timer.entries()) total += e.total_seconds;
   fmt::print(out, "{:<16} {:>10} {:>10} {:>7}\n", "pass", "total ms", "ms/frame", "share");

@@ -4,11 +4,14 @@
 
 #include <fmt/format.h>
 
+#include "seiche/kernels/simd_info.hpp"
+
 namespace seiche {
 
 RunReport::RunReport(const SceneDef& scene, std::size_t particles, int frames, int threads,
                      const std::vector<std::string>& pipeline) {
   doc_["seiche_version"] = SEICHE_VERSION;
+  doc_["simd"] = kernels::simd_description();
   doc_["scene"] = scene.name;
   doc_["settings"] = {{"particles", particles},
                       {"frames", frames},

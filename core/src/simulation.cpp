@@ -334,12 +334,7 @@ bool Simulation::fluid_needs_iteration() const {
 void Simulation::find_neighbors() {
   Neighborhood& nb = *neighborhood_;
   const std::size_t n = store_.size();
-  nb.in_grid.resize(n);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 16384), [&](const auto& r) {
-    for (std::size_t i = r.begin(); i != r.end(); ++i)
-      nb.in_grid[i] = phase_material(store_.phase[i]) == Material::Fluid ? 1 : 0;
-  });
-  nb.grid.build(nb.spec, store_.px.data(), store_.py.data(), store_.pz.data(), nb.in_grid.data(), n);
+  nb.build_grid(store_.px.data(), store_.py.data(), store_.pz.data(), store_.phase.data(), n);
   reorder(nb.grid.order());
   neighbor::build_neighbor_list(nb.grid, store_.px.data(), store_.py.data(), store_.pz.data(),
                                 n, nb.radius, nb.list);

@@ -18,8 +18,8 @@
 // The families' steps are templates on the number type T (float or Floats), with the small
 // vector type and overloads below, so that they read as the scalar formulas they are; the
 // solves instantiate them with Floats. sqrt, division and the basic operations are correctly
-// rounded in both, and simd::atan2 runs the same operations for both, so T = float gives the
-// same bits lane for lane.
+// rounded in both, and simd::atan2 runs the same operations for both, so T = float is meant to
+// give the same bits lane for lane (tested bit for bit for atan2 only, tests/simd_tests.cpp).
 #pragma once
 
 #include <tbb/blocked_range.h>

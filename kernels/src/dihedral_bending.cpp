@@ -32,7 +32,7 @@ template <class T>
 SEICHE_INLINE inline T dihedral_step(const V3<T> p[4], const T w[4], const T& rest, const T& alpha,
                                      const T& lambda, V3<T> dp[4]) {
   const T zero(0.0f), one(1.0f), pi(std::numbers::pi_v<float>),
-      two_pi(2.0f * std::numbers::pi_v<float>);
+      minus_pi(-std::numbers::pi_v<float>), two_pi(2.0f * std::numbers::pi_v<float>);
   const V3<T> e = p[1] - p[0], ac = p[2] - p[0], ad = p[3] - p[0], bd = p[3] - p[1];
   const V3<T> n1 = cross(e, ac), n2 = cross(bd, e);
   const T e2 = dot(e, e), n1sq = dot(n1, n1), n2sq = dot(n2, n2);
@@ -44,7 +44,7 @@ SEICHE_INLINE inline T dihedral_step(const V3<T> p[4], const T w[4], const T& re
   const T len = colored::vsqrt(e2_safe);
   T C = simd::atan2(dot(cross(n1, n2), e) / len, dot(n1, n2)) - rest;
   C = select(C > pi, C - two_pi, C);
-  C = select(C <= -pi, C + two_pi, C);
+  C = select(C <= minus_pi, C + two_pi, C);
 
   const V3<T> gc = n1 * (simd::negate(len) / select(ok, n1sq, one));
   const V3<T> gd = n2 * (simd::negate(len) / select(ok, n2sq, one));

@@ -12,6 +12,7 @@
 #include <xsimd/xsimd.hpp>
 
 #include "seiche/kernels/graph_coloring.hpp"
+#include "seiche/simd/batch.hpp"
 
 namespace seiche::kernels {
 
@@ -77,22 +78,20 @@ std::vector<std::uint32_t> build_hinges(std::span<const std::uint32_t> hinge_ver
   return std::move(coloring.order);
 }
 
-// The run report's bending error, every frame: the angles' sine and cosine parts kDoubleLanes
-// hinges at a time (lane = hinge, double precision, signed_angle's formula with a select for the
-// degenerate case), the C library's atan2 per hinge, then |theta - rest| and its sum in hinge
-// order. (xsimd's double atan2 was faster, but its polynomial uses xsimd's fma, which is fused on
-// AVX2 and not on AVX-512: the report would differ between the two builds.)
+// The run report's bending error, every frame: the angles kDoubleLanes hinges at a time (lane =
+// hinge, double precision, signed_angle's formula with a select for the degenerate case; xsimd's
+// atan2 agrees with the C library's to an ulp or two), then |theta - rest| and its sum in hinge
+// order. The scalar loop called atan2 hinge by hinge: at 100 x 100 the whole metrics pass went
+// from 1.16 to 0.81 ms (docs/performance.md, cloth). The batches are simd::Arch256's, AVX2 also
+// in an AVX-512 build: xsimd's atan2 evaluates its polynomial with xsimd's fma, which is fused on
+// AVX2 and not on AVX-512, so the report would otherwise differ between the two builds.
 namespace {
 
-using Doubles = xsimd::batch<double>;
+using Doubles = xsimd::batch<double, simd::Arch256>;
 constexpr std::size_t kDoubleLanes = Doubles::size;
 
-// The sine and cosine parts of the angles; (0, 1), an angle of 0, for degenerate hinges.
-struct AngleParts {
-  Doubles sin_part, cos_part;
-};
-AngleParts signed_angle_parts(const Doubles pa[3], const Doubles pb[3], const Doubles pc[3],
-                              const Doubles pd[3]) {
+Doubles signed_angles(const Doubles pa[3], const Doubles pb[3], const Doubles pc[3],
+                      const Doubles pd[3]) {
   const Doubles e[3] = {pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]};
   const Doubles ac[3] = {pc[0] - pa[0], pc[1] - pa[1], pc[2] - pa[2]};
   const Doubles bd[3] = {pd[0] - pb[0], pd[1] - pb[1], pd[2] - pb[2]};
@@ -110,7 +109,7 @@ AngleParts signed_angle_parts(const Doubles pa[3], const Doubles pb[3], const Do
                         n1[0] * n2[1] - n1[1] * n2[0]};
   const Doubles sin_part = (m[0] * e[0] + m[1] * e[1] + m[2] * e[2]) / xsimd::sqrt(e2);
   const Doubles cos_part = n1[0] * n2[0] + n1[1] * n2[1] + n1[2] * n2[2];
-  return {xsimd::select(valid, sin_part, Doubles(0.0)), xsimd::select(valid, cos_part, Doubles(1.0))};
+  return xsimd::select(valid, xsimd::atan2(sin_part, cos_part), Doubles(0.0));
 }
 
 }  // namespace
@@ -142,12 +141,10 @@ BendingError bending_error(const ParticleView& p, const Hinges& h) {
       Doubles pos[4][3];
       for (int v = 0; v < 4; ++v)
         for (int a = 0; a < 3; ++a) pos[v][a] = Doubles::load_aligned(q[v][a]);
-      alignas(64) double sin_part[kDoubleLanes], cos_part[kDoubleLanes];
-      const AngleParts parts = signed_angle_parts(pos[0], pos[1], pos[2], pos[3]);
-      parts.sin_part.store_aligned(sin_part), parts.cos_part.store_aligned(cos_part);
+      alignas(64) double theta[kDoubleLanes];
+      signed_angles(pos[0], pos[1], pos[2], pos[3]).store_aligned(theta);
       for (std::size_t l = 0; l < active; ++l) {
-        const double theta = std::atan2(sin_part[l], cos_part[l]);
-        double err = std::abs(theta - double(h.rest_angle[k0 + l]));
+        double err = std::abs(theta[l] - double(h.rest_angle[k0 + l]));
         if (err > std::numbers::pi) err = 2.0 * std::numbers::pi - err;  // wrap into [0, pi]
         s += err;
         mx = std::max(mx, err);

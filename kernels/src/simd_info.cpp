@@ -18,9 +18,21 @@ bool multiply_add_is_fused() {
   return r != 1.0f / 2048.0f;
 }
 
+const char* cpu_family() {
+#if defined(__x86_64__)
+  return "x86-64";
+#elif defined(__aarch64__)
+  return "aarch64";
+#else
+  return "other";
+#endif
+}
+
 }  // namespace
 
-SimdInfo simd_info() { return {simd::Arch::name(), simd::kLanes, multiply_add_is_fused()}; }
+SimdInfo simd_info() {
+  return {cpu_family(), simd::Arch::name(), simd::kLanes, multiply_add_is_fused()};
+}
 
 std::string simd_description() {
   const SimdInfo s = simd_info();

@@ -50,8 +50,8 @@
 namespace seiche::neighbor {
 namespace {
 
-using Batch = xsimd::batch<float, simd::ListArch>;  // 8 lanes in an AVX-512 build (batch.hpp)
-using Ints = xsimd::batch<std::uint32_t, simd::ListArch>;
+using Batch = xsimd::batch<float, simd::Arch256>;  // 8 lanes in an AVX-512 build (batch.hpp)
+using Ints = xsimd::batch<std::uint32_t, simd::Arch256>;
 constexpr std::size_t W = Batch::size;
 constexpr std::size_t kWaveBlocks = 32;  // blocks per wave: bounds the scratch lists
 constexpr float kInf = std::numeric_limits<float>::infinity();
@@ -137,7 +137,7 @@ template <bool kSafe>
   float* const oz = o.z;
   std::uint32_t* const oj = o.j;
   const Ints step = Ints(std::uint32_t(W));
-  Ints j = Ints(b) + simd::lane_index<simd::ListArch>();  // the sorted indices of the W candidates
+  Ints j = Ints(b) + simd::lane_index<simd::Arch256>();  // the sorted indices of the W candidates
   for (std::uint32_t k = b; k < e; k += std::uint32_t(W), j += step) {
     Batch c[3];
     if (kSafe) {
@@ -152,7 +152,7 @@ template <bool kSafe>
     for (int a = 0; a < 3; ++a) g[a] = xsimd::max(xsimd::max(l[a] - c[a], c[a] - h[a]), zero);
     std::uint32_t bits = simd::lane_bits(g[0] * g[0] + g[1] * g[1] + g[2] * g[2] < r2);
     if (e - k < W) bits &= (1u << (e - k)) - 1;
-    const auto pack = simd::left_pack<simd::ListArch>(bits);
+    const auto pack = simd::left_pack<simd::Arch256>(bits);
     pack.store(ox + cnt, c[0]);
     pack.store(oy + cnt, c[1]);
     pack.store(oz + cnt, c[2]);
@@ -206,7 +206,7 @@ inline std::uint32_t query1(const Cand& c, const float* const p[3], std::uint32_
     const Ints j = Ints::load_unaligned(cj + k);
     const std::uint32_t bits =
         simd::lane_bits(dx * dx + dy * dy + dz * dz < r2) & ~simd::lane_bits(j == self);
-    simd::left_pack<simd::ListArch>(bits).store(out + count, j);
+    simd::left_pack<simd::Arch256>(bits).store(out + count, j);
     count += std::uint32_t(std::popcount(bits));
   }
   return count;
@@ -318,7 +318,7 @@ void process_block(const Ctx& ctx, Block& blk, std::uint32_t b0, std::uint32_t b
 // dst[0, count) = src[0, count). `stream`: non-temporal stores, for lists far larger than the
 // caches: they skip reading the destination lines in first (half the memory traffic).
 void copy_list(const std::uint32_t* src, std::size_t count, std::uint32_t* dst, bool stream) {
-  if (stream) simd::stream_copy(dst, src, count);
+  if (stream) simd::stream_copy<simd::Arch256>(dst, src, count);
   else std::copy_n(src, count, dst);
 }
 

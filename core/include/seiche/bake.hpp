@@ -52,6 +52,7 @@ struct BakeRecipe {
   /// whose multiply-adds are fused (x86-64-v3 and up) and those whose are not (the x86-64
   /// baseline) compute different bits, so a resume needs the same kind (docs/design.md, "The
   /// determinism contract"). `simd` is the starting build's description, for messages.
+  std::string family;  ///< kernels::SimdInfo::family of the starting build
   bool fused_multiply_add = true;
   std::string simd;
 

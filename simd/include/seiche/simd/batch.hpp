@@ -4,9 +4,9 @@
 // width-dependent constant derives from kLanes. xsimd picks the widest instruction set the
 // compiler targets (SSE2: 4 lanes, AVX2: 8, AVX-512: 16, NEON: 4).
 //
-// Same bits on every width and every machine. A lane's arithmetic must not depend on how many
-// lanes a batch has, and every operation must round the same way on every instruction set:
-// - the basic operations, sqrt and division are correctly rounded everywhere;
+// Same bits on every width and every x86-64 machine. A lane's arithmetic must not depend on how
+// many lanes a batch has, and every operation must round the same way on every instruction set:
+// - the basic operations, sqrt and division are correctly rounded on every x86 instruction set;
 // - a multiply-add is written out as multiply_add (intrinsics.hpp) where the kernel wants one,
 //   and `-ffp-contract=off` keeps the compiler from fusing anything else, so a multiply-add is
 //   fused on every instruction set that has FMA (x86-64-v3 and up, AArch64) and only there
@@ -23,6 +23,10 @@
 // No horizontal operation (a sum across lanes) is allowed in a kernel's arithmetic: its order
 // would depend on the width. What needs intrinsics (the record transposes, lane compaction, the
 // fused multiply-add) lives in intrinsics.hpp, and only there.
+//
+// AArch64 builds compile and run, with bits of their own: xsimd 8.1's NEON float division and
+// sqrt are hardware estimates refined by Newton steps, not correctly rounded. bake.json records
+// the architecture family, and a resume across families is refused.
 #pragma once
 
 #include <cstddef>
@@ -59,16 +63,22 @@ SEICHE_INLINE inline void opaque(T& v) {
 #endif
 }
 
-/// The instruction set of the neighbor list's compare-and-pack loops: Arch, except in an AVX-512
-/// build, where they run on 8 lanes (AVX2 with FMA, which every AVX-512 machine has). 16 lanes do
-/// not pay there: a list is built from ~85 candidates per group and ~28 neighbors per particle, so
-/// 16 lanes pad more (96 lanes for 85 candidates, 88 with 8), every 64-byte store of packed
-/// indices straddles two cache lines, and the compare mask makes a round trip through a general
-/// register before the compress. Measured on Zen 5 (docs/performance.md, "AVX2 and AVX-512"): the
-/// grid rebuild and query took 1.01-1.05x the AVX2 build's time with 16 lanes, 1.00-1.03x with 8.
-/// The lists are integers: the same on every width.
-using ListArch =
-    std::conditional_t<std::is_base_of_v<xsimd::avx512f, Arch>, xsimd::fma3<xsimd::avx2>, Arch>;
+/// The widest instruction set of at most 256 bits: Arch, except in an AVX-512 build, where it is
+/// AVX2 (with FMA, when the build has it), which every AVX-512 machine has. Two uses:
+/// - the neighbor list's compare-and-pack loops (integers: the same on every width), where 16
+///   lanes do not pay: a list is built from ~85 candidates per group and ~28 neighbors per
+///   particle, so 16 lanes pad more (96 lanes for 85 candidates, 88 with 8), every 64-byte store
+///   of packed indices straddles two cache lines, and the compare mask makes a round trip through
+///   a general register before the compress. Measured on Zen 5 (docs/performance.md, "AVX2 and
+///   AVX-512"): the grid rebuild and query took 1.01-1.05x the AVX2 build's time with 16 lanes,
+///   1.00-1.03x with 8;
+/// - the bending metric's double-precision atan2 (xsimd's, kernels/src/hinges.cpp): run on the
+///   same instruction set in AVX2 and AVX-512 builds, it gives them the same bits (the rule
+///   "no xsimd math function" is about instruction sets that differ).
+using Arch256 = std::conditional_t<
+    std::is_base_of_v<xsimd::avx512f, Arch>,
+    std::conditional_t<xsimd::fma3<xsimd::avx2>::supported(), xsimd::fma3<xsimd::avx2>, xsimd::avx2>,
+    Arch>;
 
 /// 0, 1, ..., n - 1 for the n lanes of instruction set A.
 template <class A = Arch>

@@ -16,7 +16,8 @@
 // instruction sets named by their tag parameter: overload resolution on Arch{} picks the most
 // specific version for the instruction set xsimd chose (xsimd's own dispatch idiom), never a
 // preprocessor test. The tag-specific versions are templates on the tag, so only the one chosen
-// is ever compiled; the x86 ones are declared only on x86, where the intrinsics exist.
+// is ever compiled; the x86 ones are declared only on x86 and the AArch64 one only on AArch64,
+// where their intrinsics exist.
 // All but the multiply-adds only move bits, so they cannot change a result; the multiply-adds
 // round once on every instruction set with FMA, twice on those without (x86-64 baseline, AVX).
 #pragma once
@@ -26,6 +27,7 @@
 #include <bit>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 
 #include "seiche/simd/batch.hpp"
 
@@ -34,6 +36,12 @@
 #define SEICHE_SIMD_X86 1
 #else
 #define SEICHE_SIMD_X86 0
+#endif
+#if defined(__aarch64__)  // the AArch64 family: its intrinsics header exists
+#include <arm_neon.h>
+#define SEICHE_SIMD_AARCH64 1
+#else
+#define SEICHE_SIMD_AARCH64 0
 #endif
 
 namespace seiche::simd {
@@ -74,9 +82,11 @@ SEICHE_INLINE inline Floats mul_sub_from(const Floats& x, const Floats& y, const
 template <class A, class Record, class Index>
 SEICHE_INLINE inline Gathered4 gather4(const Record* records, const Index& index,
                                        const xsimd::generic&) {
+  static_assert(sizeof(Record) == 16, "records are 16 bytes");
   alignas(64) float c[4][kLanes];
   for (std::size_t l = 0; l < kLanes; ++l) {
-    const float* r = floats_of(records, index(l));
+    float r[4];
+    std::memcpy(r, &records[index(l)], sizeof r);  // the record's 16 bytes as 4 floats
     c[0][l] = r[0], c[1][l] = r[1], c[2][l] = r[2], c[3][l] = r[3];
   }
   return {Floats::load_aligned(c[0]), Floats::load_aligned(c[1]), Floats::load_aligned(c[2]),
@@ -88,10 +98,11 @@ SEICHE_INLINE inline void scatter4(Record* records, const Index& index, const Fl
                                    const Floats& y, const Floats& z, const Floats& w,
                                    std::size_t active, const xsimd::generic&) {
   alignas(64) float c[4][kLanes];
+  static_assert(sizeof(Record) == 16, "records are 16 bytes");
   x.store_aligned(c[0]), y.store_aligned(c[1]), z.store_aligned(c[2]), w.store_aligned(c[3]);
   for (std::size_t l = 0; l < active; ++l) {
-    float* r = floats_of(records, index(l));
-    r[0] = c[0][l], r[1] = c[1][l], r[2] = c[2][l], r[3] = c[3][l];
+    const float r[4] = {c[0][l], c[1][l], c[2][l], c[3][l]};
+    std::memcpy(&records[index(l)], r, sizeof r);
   }
 }
 
@@ -371,6 +382,20 @@ inline void stream_copy(std::uint32_t* dst, const std::uint32_t* src, std::size_
 
 #endif  // SEICHE_SIMD_X86
 
+#if SEICHE_SIMD_AARCH64
+
+// ---- AArch64: NEON (4 lanes) ----------------------------------------------------------------------
+
+// xsimd 8.1's fnma on NEON multiplies and subtracts; its fma is the fused instruction already.
+template <class A>
+SEICHE_INLINE inline Floats mul_sub_from(const Floats& x, const Floats& y, const Floats& z,
+                                         const xsimd::neon64&) {
+  using F = xsimd::batch<float, A>;
+  return F(vfmsq_f32(F(z), F(x), F(y)));
+}
+
+#endif  // SEICHE_SIMD_AARCH64
+
 }  // namespace detail
 
 /// x y + z, rounded once where the instruction set has FMA.
@@ -405,14 +430,14 @@ SEICHE_INLINE inline void scatter4(Record* records, const Index& index, const Fl
   detail::scatter4<Arch>(records, index, x, y, z, w, active, Arch{});
 }
 
-/// Bit l set where lane l of the mask is (a mask of Arch's or of ListArch's batches).
+/// Bit l set where lane l of the mask is (a mask of Arch's or of Arch256's batches).
 template <class T, class A>
 SEICHE_INLINE inline std::uint32_t lane_bits(const xsimd::batch_bool<T, A>& m) {
   return detail::lane_bits<A>(m, A{});
 }
 
 /// The lanes selected by `bits` (bit l = lane l), stored in lane order to out[0, popcount(bits)):
-/// left_pack<A>(bits).store(out, v) for batches of instruction set A (Arch or ListArch). A store
+/// left_pack<A>(bits).store(out, v) for batches of instruction set A (Arch or Arch256). A store
 /// may write a whole batch at out: leave room.
 template <class A = Arch>
 SEICHE_INLINE inline auto left_pack(std::uint32_t bits) {
@@ -427,8 +452,9 @@ SEICHE_INLINE inline Floats keep_if(const Mask& m, const Floats& v) {
 /// dst[0, count) = src[0, count), with stores that bypass the caches where the instruction set
 /// has them: for outputs far larger than the caches (they skip reading the destination in first,
 /// half the memory traffic).
+template <class A = Arch>
 inline void stream_copy(std::uint32_t* dst, const std::uint32_t* src, std::size_t count) {
-  detail::stream_copy<Arch>(dst, src, count, Arch{});
+  detail::stream_copy<A>(dst, src, count, A{});
 }
 
 }  // namespace seiche::simd
