@@ -6,6 +6,17 @@
 
 namespace seiche {
 
+kernels::ParticleView particle_view(ParticleStore& store) {
+  kernels::ParticleView v;
+  v.n = store.size();
+  v.x = store.x.data(), v.y = store.y.data(), v.z = store.z.data();
+  v.px = store.px.data(), v.py = store.py.data(), v.pz = store.pz.data();
+  v.vx = store.vx.data(), v.vy = store.vy.data(), v.vz = store.vz.data();
+  v.w = store.w.data();
+  v.phase = store.phase.data();
+  return v;
+}
+
 template <class F>
 void ParticleStore::for_each_state_column(F&& f) {
   for (FloatColumn* c : {&x, &y, &z, &px, &py, &pz, &vx, &vy, &vz, &w}) f(*c);

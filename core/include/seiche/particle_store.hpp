@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "seiche/aligned_column.hpp"
+#include "seiche/kernels/particle_view.hpp"
 #include "seiche/kernels/phase.hpp"
 
 namespace seiche {
@@ -67,6 +68,10 @@ class ParticleStore {
   template <class T>
   AlignedColumn<T>& spare_column();
 };
+
+/// What kernels see of the store: its columns' pointers now (a reorder swaps the buffers, so a
+/// view is made where a pass runs, not kept).
+kernels::ParticleView particle_view(ParticleStore& store);
 
 /// new_index[old] for a sorted[k] = old[order[k]] permutation.
 std::vector<std::uint32_t> inverse_permutation(std::span<const std::uint32_t> order);

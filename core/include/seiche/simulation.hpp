@@ -1,15 +1,19 @@
-// The simulation: owns the particle store and the constraint data of a scene, assembles the
-// substep pipeline from what the scene contains, and steps it.
+// The simulation: owns the particle store and the constraint families of a scene (fluid, cloth,
+// raw distance constraints, particle contacts, colliders, and the motion every particle has;
+// core/src/family.hpp), and steps them.
 //
-// One substep (XPBD, "small steps"):
+// One substep (XPBD, "small steps") runs the stages in order, each stage the passes of every
+// family in the order of their keys (pass_order in core/src/family.hpp):
 //   predict          v += dt g, p = x + dt v
-//   neighbors        cell keys -> counting sort -> reorder the store -> neighbor lists
-//   contact pairs    candidate particle pairs of cloth contacts (particle_contact_stage.hpp)
-//   iterations x     every constraint pass (fluid density, distance, collisions, ...); with a
-//                    density tolerance, more while the fluid is too compressed
+//   neighbors        cell keys -> counting sort -> reorder the store -> neighbor lists;
+//                    candidate particle pairs of cloth contacts
+//   begin substep    XPBD multipliers reset
+//   iterations x     every constraint pass (fluid density, distance, cloth, contacts, collisions);
+//                    with a density tolerance, more while the fluid is too compressed
 //   update           v = (p - x) / dt, x = p
-//   velocity passes  vorticity confinement, XSPH viscosity
-// A pass exists only if the scene needs it; new materials add their passes to the lists.
+//   velocity passes  damping, vorticity confinement, XSPH viscosity
+// A family and its passes exist only if the scene needs them; the run report's pipeline list is
+// the same table.
 #pragma once
 
 #include <cstddef>
@@ -26,18 +30,13 @@
 
 namespace seiche {
 
-class FluidSolver;
 class DistanceSolver;
 class ClothSolver;
-class ParticleContactStage;
-class FluidErrorProbe;
-struct MeshSdf;
-struct Neighborhood;
-namespace kernels {
-struct ParticleView;
-struct CollisionShape;
-struct CollisionParams;
-}  // namespace kernels
+class Family;
+class FluidFamily;
+class DistanceFamily;
+class ClothFamily;
+struct Pass;
 
 /// Whether Simulation::step_frame measures the frame (FrameMetrics). Measuring never changes
 /// the simulation: a run measured every frame and one never measured have the same bits
@@ -70,9 +69,9 @@ class Simulation {
   double time() const { return time_; }
 
   /// The cloths of the scene (meshes, vertex ids, constraint counts), or null when it has none.
-  const ClothSolver* cloth() const { return cloth_.get(); }
+  const ClothSolver* cloth() const;
   /// The raw distance constraints, or null when the scene has none.
-  const DistanceSolver* distance() const { return distance_.get(); }
+  const DistanceSolver* distance() const;
   /// How many particles were created outside the domain and moved to its nearest point (only
   /// a scene built in code can do that: the scene loader rejects such files).
   std::size_t moved_into_domain() const { return moved_into_domain_; }
@@ -97,48 +96,36 @@ class Simulation {
   void restore_cloth_stretch_multipliers(std::span<const float> saved);
 
  private:
-  struct Pass {
-    const char* name;
-    std::function<void(const StepContext&)> run;
-  };
-
-  void create_particles();
+  void create_families();
   void move_into_domain();
-  void create_distance_constraints();
-  void create_colliders();
   void assemble_pipeline();
 
+  /// One substep: the stages in order, each running its passes (pass_order in family.hpp); the
+  /// Iterate stage `iterations` times, then more while a family votes for it (up to the cap).
   void substep(StepContext& ctx);
-  /// After the fixed iterations: whether the fluid's mean density error at the start of the last
-  /// iteration exceeds solver.density_tolerance (false without fluid or tolerance).
-  bool fluid_needs_iteration() const;
-  void find_neighbors();
+  void run_stage(int stage, const StepContext& ctx);
+  bool a_family_wants_iteration() const;
   /// Reorders the store (new k = old order[k]) and remaps every index held elsewhere.
   void reorder(std::span<const std::uint32_t> order);
   /// The frame's constraint errors on top of state_metrics(). Reads the state and writes only
-  /// measuring scratch (fluid_probe_), so that it cannot change what the next substep computes.
+  /// measuring scratch, so that it cannot change what the next substep computes.
   FrameMetrics measure();
 
   SceneDef scene_;
   ParticleStore store_;
   PassTimer timer_;
-  kernels::ParticleView view();
 
-  std::unique_ptr<Neighborhood> neighborhood_;  // null when no pass needs neighbors
-  std::unique_ptr<FluidSolver> fluid_;
-  std::unique_ptr<FluidErrorProbe> fluid_probe_;  // with fluid_: the frame's density error
-  std::unique_ptr<DistanceSolver> distance_;
-  std::unique_ptr<ClothSolver> cloth_;
-  std::unique_ptr<ParticleContactStage> contacts_;    // null unless particles of cloth can touch
-  std::vector<std::unique_ptr<MeshSdf>> mesh_sdfs_;   // the fields of the mesh colliders
-  std::unique_ptr<kernels::CollisionParams> collision_params_;
-  std::vector<kernels::CollisionShape> colliders_;
-  float density_tolerance_ = 0.0f;  // 0 without fluid: the fixed iteration count
-  int iteration_cap_ = 1;           // max(iterations, max_iterations) with a tolerance, else iterations
-  std::vector<Pass> begin_substep_passes_;  // reset per-substep state (XPBD lambdas)
-  std::vector<Pass> constraint_passes_;     // run every iteration, in order
-  std::vector<Pass> velocity_passes_;       // run after the velocity update
-  std::vector<std::function<void(std::span<const std::uint32_t>)>> index_remappers_;
+  // The families of this scene, in the order they were built (family.hpp); the typed pointers
+  // name the ones other code asks for (null when the scene has none).
+  std::vector<std::unique_ptr<Family>> families_;
+  FluidFamily* fluid_ = nullptr;
+  DistanceFamily* distance_ = nullptr;
+  ClothFamily* cloth_ = nullptr;
+  // Every family's passes, sorted by (stage, order); stage s runs passes_[stage_begin_[s],
+  // stage_begin_[s + 1]).
+  std::vector<Pass> passes_;
+  std::vector<std::size_t> stage_begin_;
+  int iteration_cap_ = 1;  // max(iterations, max_iterations) when a family votes, else iterations
   std::size_t moved_into_domain_ = 0;
   int frame_ = 0;
   double time_ = 0.0;

@@ -1,0 +1,24 @@
+#include "families/distance_family.hpp"
+
+namespace seiche {
+
+DistanceFamily::DistanceFamily(const SceneDef& scene, ParticleStore& store) : store_(store) {
+  std::vector<std::uint32_t> ci, cj;
+  std::vector<float> rest, compliance;
+  for (const DistanceConstraintDef& d : scene.distance_constraints) {
+    ci.push_back(std::uint32_t(d.i));
+    cj.push_back(std::uint32_t(d.j));
+    rest.push_back(d.rest_length);
+    compliance.push_back(d.compliance);
+  }
+  solver_ = std::make_unique<DistanceSolver>(ci, cj, rest, compliance, particle_view(store));
+}
+
+void DistanceFamily::add_passes(std::vector<Pass>& passes) {
+  passes.push_back({"distance", Stage::BeginSubstep, pass_order::kDistanceReset, false,
+                    [this](const StepContext&) { solver_->begin_substep(); }});
+  passes.push_back({"distance", Stage::Iterate, pass_order::kDistance, true,
+                    [this](const StepContext& c) { solver_->solve(particle_view(store_), c.dt); }});
+}
+
+}  // namespace seiche

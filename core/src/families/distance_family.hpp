@@ -1,0 +1,32 @@
+// The raw distance constraints of a scene ("distance_constraints", distance_solver.hpp): the
+// XPBD multipliers reset every substep, one colored solve every iteration, the particle indices
+// remapped after a reorder, |C| / rest_length measured at the end of a frame.
+#pragma once
+
+#include <memory>
+
+#include "distance_solver.hpp"
+#include "family.hpp"
+#include "seiche/particle_store.hpp"
+#include "seiche/scene.hpp"
+
+namespace seiche {
+
+class DistanceFamily final : public Family {
+ public:
+  /// The scene's constraints over the store's particles as they are now (rest_length < 0: the
+  /// current distance).
+  DistanceFamily(const SceneDef& scene, ParticleStore& store);
+
+  const DistanceSolver& solver() const { return *solver_; }
+
+  void add_passes(std::vector<Pass>& passes) override;
+  void remap(std::span<const std::uint32_t> new_index) override { solver_->remap(new_index); }
+  void measure(FrameMetrics& m) override { m.distance = solver_->measure(particle_view(store_)); }
+
+ private:
+  ParticleStore& store_;
+  std::unique_ptr<DistanceSolver> solver_;
+};
+
+}  // namespace seiche

@@ -1,0 +1,79 @@
+// A constraint family: what the substep asks of every material (fluid, cloth, raw distance
+// constraints, particle contacts, colliders, and the motion every particle has), and the stages
+// a substep runs.
+//
+// A family declares its passes, each with the stage it belongs to and an order key within the
+// stage; Simulation::substep() runs the stages in order and, in each, the passes of every family
+// in the order of their keys. The keys of all families are in one table (pass_order below), so
+// the whole substep reads in one place, and the run report's pipeline list is the same table.
+// After the store is reordered, every family remaps the particle indices it holds; after the
+// fixed iterations, families may vote for more (the fluid's density tolerance); at the end of a
+// frame, each measures the error of its constraints.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <span>
+#include <vector>
+
+#include "seiche/frame_metrics.hpp"
+#include "seiche/simulation.hpp"
+
+namespace seiche {
+
+/// The stages of a substep, in the order they run (docs/design.md, "One substep").
+enum class Stage : int {
+  Predict,       ///< v += dt g, p = x + dt v
+  Neighbors,     ///< grids and neighbor lists on the predicted positions (may reorder the store)
+  BeginSubstep,  ///< per-substep resets (XPBD multipliers)
+  Iterate,       ///< the constraint passes, `iterations` times or more (see Family::wants_iteration)
+  Update,        ///< v = (p - x) / dt, x = p
+  Velocity,      ///< velocity passes: damping, vorticity, viscosity
+};
+inline constexpr int kStageCount = int(Stage::Velocity) + 1;
+
+/// Where each pass runs within its stage, ascending: every family's keys in one table.
+namespace pass_order {
+inline constexpr int kPredict = 0;           // Predict
+inline constexpr int kFluidNeighbors = 0;    // Neighbors: reorders the store, so it comes first
+inline constexpr int kContactPairs = 10;     //   reads the fluid's grid of this substep
+inline constexpr int kDistanceReset = 0;     // BeginSubstep
+inline constexpr int kClothReset = 10;
+inline constexpr int kFluidDensity = 0;      // Iterate
+inline constexpr int kDistance = 10;
+inline constexpr int kClothStretch = 20;
+inline constexpr int kClothBending = 21;     //   directly after stretch: it reads what stretch packed
+inline constexpr int kTethers = 22;
+inline constexpr int kParticleContacts = 30;
+inline constexpr int kCollisions = 100;      //   last: nothing is pushed into a collider after it
+inline constexpr int kUpdate = 0;            // Update
+inline constexpr int kDamping = 0;           // Velocity
+inline constexpr int kVorticity = 10;
+inline constexpr int kViscosity = 20;
+}  // namespace pass_order
+
+struct Pass {
+  const char* name;  ///< as the pass timer and the run report's pipeline list name it
+  Stage stage;
+  int order;         ///< within the stage, ascending (pass_order)
+  bool reported;     ///< timed and listed in the pipeline (a per-substep reset is neither)
+  std::function<void(const StepContext&)> run;
+};
+
+class Family {
+ public:
+  virtual ~Family() = default;
+  /// Appends the passes this family runs (only those its scene section needs).
+  virtual void add_passes(std::vector<Pass>& passes) = 0;
+  /// After the store was reordered: new_index[old] for every particle index the family holds.
+  virtual void remap(std::span<const std::uint32_t> new_index) { (void)new_index; }
+  /// Whether this family may ask for iterations past solver.iterations (up to max_iterations).
+  virtual bool votes_on_iterations() const { return false; }
+  /// After an iteration, from the fixed count on: whether this family wants another.
+  virtual bool wants_iteration() const { return false; }
+  /// Its part of the frame's metrics: its constraints' error on the store's final positions.
+  /// Only reads the store.
+  virtual void measure(FrameMetrics& m) { (void)m; }
+};
+
+}  // namespace seiche
