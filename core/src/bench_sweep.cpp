@@ -345,13 +345,26 @@ BenchResult run_bench(const SceneFactory& load_scene, const BenchOptions& option
                           [&] { return run_bench_on_threads(load_scene, options, threads); });
 }
 
+namespace {
+
+// The error rows any run of the sweep measured (a run that diverged may have none), in order.
+RunErrors rows_of_any_run(const BenchResult& result) {
+  RunErrors rows;
+  for (const BenchRun& r : result.runs)
+    for (const ErrorRow& e : r.constraint_errors)
+      if (!find_error(rows, e.key)) rows.push_back(e);
+  return rows;
+}
+
+}  // namespace
+
 std::string bench_csv(const BenchResult& result) {
+  const RunErrors rows = rows_of_any_run(result);
   std::string csv = "role";
   for (const std::string& key : result.axes) csv += "," + key;
-  csv +=
-      ",substeps,iterations,iterations_run,frames,diverged,ms_per_frame,error_rms,error_max,spacing_m,density_error_mean,"
-      "density_error_max,distance_error_mean,distance_error_max,strain_mean,strain_max,bending_error_mean,"
-      "bending_error_max,pareto\n";
+  csv += ",substeps,iterations,iterations_run,frames,diverged,ms_per_frame,error_rms,error_max,spacing_m";
+  for (const ErrorRow& e : rows) csv += "," + e.key + "_mean," + e.key + "_max";
+  csv += ",pareto\n";
   for (const BenchRun& r : result.runs) {
     csv += r.role == BenchRun::Role::Sweep ? "sweep" : r.role == BenchRun::Role::Reference ? "reference" : "reference_check";
     for (std::size_t a = 0; a < result.axes.size(); ++a) csv += "," + (a < r.values.size() ? r.values[a] : "");
@@ -359,9 +372,10 @@ std::string bench_csv(const BenchResult& result) {
                        r.frames, r.diverged ? 1 : 0,
                        format_value(r.ms_per_frame), format_value(r.error_rms), format_value(r.error_max),
                        format_value(result.spacing));
-    for (const auto* e : {&r.constraint_errors.density, &r.constraint_errors.distance, &r.constraint_errors.strain,
-                          &r.constraint_errors.bending})
-      csv += *e ? fmt::format(",{},{}", format_value((*e)->mean), format_value((*e)->max)) : std::string(",,");
+    for (const ErrorRow& row : rows) {
+      const ErrorRow* e = find_error(r.constraint_errors, row.key);
+      csv += e ? fmt::format(",{},{}", format_value(e->mean), format_value(e->max)) : std::string(",,");
+    }
     csv += fmt::format(",{}\n", r.pareto ? 1 : 0);
   }
   return csv;
@@ -381,24 +395,14 @@ void print_bench_table(std::ostream& out, const BenchResult& result) {
   // Columns: the swept keys, time, the position error, then every family the runs measured.
   std::vector<std::string> header;
   for (const std::string& key : result.axes) header.push_back(key.substr(key.find_last_of('.') + 1));
-  RunErrors families;  // the families any run measured
-  for (const BenchRun& r : result.runs) {
-    const RunErrors& e = r.constraint_errors;
-    if (e.density) families.density = e.density;
-    if (e.distance) families.distance = e.distance;
-    if (e.strain) families.strain = e.strain;
-    if (e.bending) families.bending = e.bending;
-  }
+  const RunErrors rows = rows_of_any_run(result);
   // Iterations actually run, when a density tolerance added some to any run.
   const bool adaptive = std::any_of(result.runs.begin(), result.runs.end(), [](const BenchRun& r) {
     return r.iterations > 0 && r.iterations_run > r.iterations + 1e-9;
   });
   if (adaptive) header.push_back("iterations run");
   for (const char* h : {"ms/frame", "rms error", "max error"}) header.push_back(h);
-  if (families.density) header.push_back("density mean/max");
-  if (families.distance) header.push_back("distance mean/max");
-  if (families.strain) header.push_back("strain mean/max");
-  if (families.bending) header.push_back("bending mean/max");
+  for (const ErrorRow& e : rows) header.push_back(e.label + " mean/max");
   header.push_back("pareto");
   std::vector<std::size_t> width;
   for (const std::string& h : header) width.push_back(std::max<std::size_t>(h.size(), 10));
@@ -416,14 +420,12 @@ void print_bench_table(std::ostream& out, const BenchResult& result) {
     cells.push_back(fmt::format("{:.2f}", r.ms_per_frame));
     cells.push_back(r.diverged ? "diverged" : fmt::format("{:.3g}", r.error_rms));
     cells.push_back(r.diverged ? fmt::format("at frame {}", r.frames + 1) : fmt::format("{:.3g}", r.error_max));
-    auto family = [&](const std::optional<RunError>& present, const std::optional<RunError>& e, double scale,
-                      const char* unit) {
-      if (present) cells.push_back(e ? fmt::format("{:.3g}/{:.3g}{}", scale * e->mean, scale * e->max, unit) : "-");
-    };
-    family(families.density, r.constraint_errors.density, 100.0, "%");
-    family(families.distance, r.constraint_errors.distance, 100.0, "%");
-    family(families.strain, r.constraint_errors.strain, 100.0, "%");
-    family(families.bending, r.constraint_errors.bending, 180.0 / 3.14159265358979323846, "deg");
+    for (const ErrorRow& row : rows) {
+      const ErrorRow* e = find_error(r.constraint_errors, row.key);
+      const bool angle = row.unit == ErrorUnit::Radians;
+      const double scale = angle ? 180.0 / 3.14159265358979323846 : 100.0;
+      cells.push_back(e ? fmt::format("{:.3g}/{:.3g}{}", scale * e->mean, scale * e->max, angle ? "deg" : "%") : "-");
+    }
     cells.push_back(r.pareto ? "*" : "");
     print_row(cells);
     if (!r.diverged && (!best || r.error_rms < best->error_rms)) best = &r;

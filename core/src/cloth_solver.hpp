@@ -31,6 +31,14 @@
 
 namespace seiche {
 
+/// The cloths' errors: the run report's "cloth_strain" and "cloth_bending_error".
+struct ClothError {
+  double strain_mean = 0.0;   ///< mean |l - l0| / l0 over the stretch constraints (edges)
+  double strain_max = 0.0;
+  double bending_mean = 0.0;  ///< mean |theta - theta0| over the hinges (rad)
+  double bending_max = 0.0;
+};
+
 /// A cloth's mesh as the scene defines it (a sheet or the OBJ), with its topology. `file` names
 /// the scene file in errors. Warnings (degenerate faces) are in mesh.warnings.
 struct ClothShape {

@@ -11,6 +11,12 @@
 
 namespace seiche {
 
+/// The raw distance constraints' error: the run report's "distance_error".
+struct DistanceConstraintError {
+  double mean = 0.0;  ///< mean |C| / rest_length (|C| in m for zero rest length)
+  double max = 0.0;
+};
+
 class DistanceSolver {
  public:
   /// i, j are store indices at build time; rest_length < 0 means "the current distance".

@@ -17,6 +17,7 @@
 
 #include <vector>
 
+#include "fluid_solver.hpp"
 #include "neighborhood.hpp"
 #include "seiche/aligned_column.hpp"
 #include "seiche/frame_metrics.hpp"

@@ -20,6 +20,12 @@ namespace seiche {
 constexpr double kTensileReferenceSubstep = 1.0 / 480.0;
 double tensile_substep_scale(const SolverDef& solver);
 
+/// The fluid's density error: the run report's "fluid_density_error".
+struct FluidError {
+  double mean = 0.0;  ///< mean over fluid particles of max(rho / rho0 - 1, 0)
+  double max = 0.0;   ///< max over fluid particles of the same
+};
+
 /// Mean and max of max(rho / rho0 - 1, 0) over density[0, n) (deterministic: blocked sums in
 /// index order).
 FluidError density_error(const float* density, std::size_t n, float rest_density);

@@ -4,40 +4,29 @@
 
 namespace seiche {
 
-namespace {
-
-template <class Get>
-std::optional<RunError> summarize(std::span<const FrameMetrics> frames, Get get) {
-  if (frames.empty() || !get(frames.front())) return std::nullopt;
-  RunError e;
-  for (const FrameMetrics& m : frames) {
-    const auto [mean, max] = *get(m);
-    e.mean += mean;
-    e.max = std::max(e.max, max);
-  }
-  e.mean /= double(frames.size());
-  return e;
+const ErrorRow* find_error(std::span<const ErrorRow> rows, std::string_view key) {
+  for (const ErrorRow& r : rows)
+    if (r.key == key) return &r;
+  return nullptr;
 }
 
-using Pair = std::optional<std::pair<double, double>>;
-
-}  // namespace
-
 RunErrors summarize_errors(std::span<const FrameMetrics> frames) {
-  RunErrors r;
-  r.density = summarize(frames, [](const FrameMetrics& m) {
-    return m.fluid ? Pair{{m.fluid->mean, m.fluid->max}} : std::nullopt;
-  });
-  r.distance = summarize(frames, [](const FrameMetrics& m) {
-    return m.distance ? Pair{{m.distance->mean, m.distance->max}} : std::nullopt;
-  });
-  r.strain = summarize(frames, [](const FrameMetrics& m) {
-    return m.cloth ? Pair{{m.cloth->strain_mean, m.cloth->strain_max}} : std::nullopt;
-  });
-  r.bending = summarize(frames, [](const FrameMetrics& m) {
-    return m.cloth ? Pair{{m.cloth->bending_mean, m.cloth->bending_max}} : std::nullopt;
-  });
-  return r;
+  RunErrors run;
+  std::vector<std::size_t> frames_with;  // per row of `run`: the frames that had it
+  for (const FrameMetrics& m : frames)
+    for (const ErrorRow& e : m.errors) {
+      auto it = std::find_if(run.begin(), run.end(), [&](const ErrorRow& r) { return r.key == e.key; });
+      if (it == run.end()) {
+        run.push_back({e.key, e.label, e.unit, 0.0, 0.0});
+        frames_with.push_back(0);
+        it = run.end() - 1;
+      }
+      it->mean += e.mean;
+      it->max = std::max(it->max, e.max);
+      ++frames_with[std::size_t(it - run.begin())];
+    }
+  for (std::size_t k = 0; k < run.size(); ++k) run[k].mean /= double(frames_with[k]);
+  return run;
 }
 
 }  // namespace seiche

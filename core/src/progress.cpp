@@ -52,18 +52,14 @@ void print_run_summary(std::ostream& out, const SceneDef& scene, const RunResult
                total > 0 ? 100.0 * e.total_seconds / total : 0.0);
   if (r.metrics.empty()) return;
   // Error of each active constraint family over the run (summarize_errors).
-  const RunErrors e = summarize_errors(r.metrics);
   fmt::print(out, "\n{:<16} {:>10} {:>10}\n", "error", "mean", "max");
-  auto percent = [&](const char* name, const std::optional<RunError>& f) {
-    if (f) fmt::print(out, "{:<16} {:>9.3f}% {:>9.3f}%\n", name, 100.0 * f->mean, 100.0 * f->max);
-  };
-  percent("fluid density", e.density);
-  percent("distance", e.distance);
-  percent("cloth strain", e.strain);
-  if (e.bending) {  // an angle: shown in degrees, not percent
-    constexpr double kDegrees = 180.0 / 3.14159265358979323846;
-    fmt::print(out, "{:<16} {:>8.3f}deg {:>7.3f}deg\n", "cloth bending", kDegrees * e.bending->mean,
-               kDegrees * e.bending->max);
+  for (const ErrorRow& e : summarize_errors(r.metrics)) {
+    if (e.unit == ErrorUnit::Radians) {  // an angle: shown in degrees, not percent
+      constexpr double kDegrees = 180.0 / 3.14159265358979323846;
+      fmt::print(out, "{:<16} {:>8.3f}deg {:>7.3f}deg\n", e.label, kDegrees * e.mean, kDegrees * e.max);
+    } else {
+      fmt::print(out, "{:<16} {:>9.3f}% {:>9.3f}%\n", e.label, 100.0 * e.mean, 100.0 * e.max);
+    }
   }
   // Extra iterations the density tolerance asked for.
   double iterations = 0.0;

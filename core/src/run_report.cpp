@@ -40,12 +40,7 @@ void RunReport::add_frame(const FrameMetrics& m, const PassTimer& timer) {
   f["pass_ms"] = pass_ms;
   f["particles"] = m.particles;
   f["iterations"] = {{"mean", m.iterations_mean}, {"max", m.iterations_max}};
-  if (m.fluid) f["fluid_density_error"] = {{"mean", m.fluid->mean}, {"max", m.fluid->max}};
-  if (m.distance) f["distance_error"] = {{"mean", m.distance->mean}, {"max", m.distance->max}};
-  if (m.cloth) {
-    f["cloth_strain"] = {{"mean", m.cloth->strain_mean}, {"max", m.cloth->strain_max}};
-    f["cloth_bending_error"] = {{"mean", m.cloth->bending_mean}, {"max", m.cloth->bending_max}};
-  }
+  for (const ErrorRow& e : m.errors) f[e.key] = {{"mean", e.mean}, {"max", e.max}};
   f["kinetic_energy"] = m.kinetic_energy;
   f["potential_energy"] = m.potential_energy;
   f["max_speed"] = m.max_speed;

@@ -3,27 +3,30 @@
 #pragma once
 
 #include <cstddef>
-#include <optional>
 #include <span>
+#include <string>
+#include <string_view>
+#include <vector>
 
 namespace seiche {
 
-struct FluidError {
-  double mean = 0.0;  ///< mean over fluid particles of max(rho / rho0 - 1, 0)
-  double max = 0.0;   ///< max over fluid particles of the same
-};
+/// How an error row reads: a ratio (the summary and the bench show it in percent) or an angle in
+/// radians (shown in degrees).
+enum class ErrorUnit { Ratio, Radians };
 
-struct DistanceConstraintError {
-  double mean = 0.0;  ///< mean |C| / rest_length (|C| in m for zero rest length)
+/// One error of a constraint family, over a frame or over a run. Each family adds its rows in
+/// Family::measure (core/src/family.hpp); the run report, the summary, the bench and the
+/// stability suite show every row they are given, so a new family needs none of them changed.
+struct ErrorRow {
+  std::string key;    ///< the run report's key: "fluid_density_error", "cloth_strain", ...
+  std::string label;  ///< the summary's and the bench's name: "fluid density", "cloth strain", ...
+  ErrorUnit unit = ErrorUnit::Ratio;
+  double mean = 0.0;
   double max = 0.0;
 };
 
-struct ClothError {
-  double strain_mean = 0.0;   ///< mean |l - l0| / l0 over the stretch constraints (edges)
-  double strain_max = 0.0;
-  double bending_mean = 0.0;  ///< mean |theta - theta0| over the hinges (rad)
-  double bending_max = 0.0;
-};
+/// The row of `key` among `rows`, or null.
+const ErrorRow* find_error(std::span<const ErrorRow> rows, std::string_view key);
 
 struct FrameMetrics {
   int frame = 0;                  ///< 1-based
@@ -40,25 +43,14 @@ struct FrameMetrics {
   /// (more than solver.iterations only with a density tolerance).
   double iterations_mean = 0.0;
   int iterations_max = 0;
-  std::optional<FluidError> fluid;
-  std::optional<DistanceConstraintError> distance;
-  std::optional<ClothError> cloth;
+  /// Every active family's errors, in the order of the families (empty when not measured).
+  std::vector<ErrorRow> errors;
+  const ErrorRow* error(std::string_view key) const { return find_error(errors, key); }
 };
 
-/// A constraint family's error over a run: the mean over frames of the frame's mean, and the
-/// largest frame max.
-struct RunError {
-  double mean = 0.0;
-  double max = 0.0;
-};
-
-/// Every active family's error over a run (a family absent from the scene stays empty).
-struct RunErrors {
-  std::optional<RunError> density;   ///< fluid density error
-  std::optional<RunError> distance;  ///< raw distance constraints, |C| / rest_length
-  std::optional<RunError> strain;    ///< cloth strain
-  std::optional<RunError> bending;   ///< cloth bending error (rad)
-};
+/// Every active family's errors over a run: per row, the mean over frames of the frame's mean and
+/// the largest frame max, in the order the rows first appear.
+using RunErrors = std::vector<ErrorRow>;
 RunErrors summarize_errors(std::span<const FrameMetrics> frames);
 
 }  // namespace seiche

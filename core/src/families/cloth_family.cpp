@@ -19,4 +19,10 @@ void ClothFamily::add_passes(std::vector<Pass>& passes) {
                       [this](const StepContext&) { solver_->solve_tethers(particle_view(store_)); }});
 }
 
+void ClothFamily::measure(FrameMetrics& m) {
+  const ClothError e = solver_->measure(particle_view(store_));
+  m.errors.push_back({"cloth_strain", "cloth strain", ErrorUnit::Ratio, e.strain_mean, e.strain_max});
+  m.errors.push_back({"cloth_bending_error", "cloth bending", ErrorUnit::Radians, e.bending_mean, e.bending_max});
+}
+
 }  // namespace seiche

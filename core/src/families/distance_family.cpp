@@ -21,4 +21,9 @@ void DistanceFamily::add_passes(std::vector<Pass>& passes) {
                     [this](const StepContext& c) { solver_->solve(particle_view(store_), c.dt); }});
 }
 
+void DistanceFamily::measure(FrameMetrics& m) {
+  const DistanceConstraintError e = solver_->measure(particle_view(store_));
+  m.errors.push_back({"distance_error", "distance", ErrorUnit::Ratio, e.mean, e.max});
+}
+
 }  // namespace seiche

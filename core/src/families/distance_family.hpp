@@ -22,7 +22,7 @@ class DistanceFamily final : public Family {
 
   void add_passes(std::vector<Pass>& passes) override;
   void remap(std::span<const std::uint32_t> new_index) override { solver_->remap(new_index); }
-  void measure(FrameMetrics& m) override { m.distance = solver_->measure(particle_view(store_)); }
+  void measure(FrameMetrics& m) override;
 
  private:
   ParticleStore& store_;

@@ -73,7 +73,10 @@ bool FluidFamily::wants_iteration() const {
   return density_tolerance_ > 0.0f && solver_->predicted_density_error() > density_tolerance_;
 }
 
-void FluidFamily::measure(FrameMetrics& m) { m.fluid = probe_->measure(store_); }
+void FluidFamily::measure(FrameMetrics& m) {
+  const FluidError e = probe_->measure(store_);
+  m.errors.push_back({"fluid_density_error", "fluid density", ErrorUnit::Ratio, e.mean, e.max});
+}
 
 // The grid on the predicted positions, the store reordered into its order (every index held
 // elsewhere remapped), then the lists on the sorted positions.
