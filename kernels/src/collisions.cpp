@@ -145,7 +145,7 @@ void collide_shapes(const ParticleView& p, const CollisionParams& params,
 // particle_radius per lane: one compare when the lanes share a phase (materials and cloths are
 // stored in blocks), else lane by lane.
 Floats lane_radii(const Lanes& lanes, const std::uint32_t* phase, const CollisionParams& c) {
-  using Ints = xsimd::batch<std::uint32_t>;
+  using seiche::simd::Ints;
   const std::uint32_t first = phase[lanes.i];
   if (lanes.full() && xsimd::all(Ints::load_unaligned(phase + lanes.i) == Ints(first)))
     return Floats(particle_radius(first, c));

@@ -28,7 +28,7 @@ void parallel_blocks(IndexRange range, Body&& body) {
 }  // namespace
 
 IndexRange index_range(std::initializer_list<std::span<const std::uint32_t>> columns) {
-  using Ints = xsimd::batch<std::uint32_t>;
+  using seiche::simd::Ints;
   Ints vmin(~0u), vmax(0u);
   std::uint32_t lo = ~0u, hi = 0;
   bool any = false;

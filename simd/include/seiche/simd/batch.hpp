@@ -48,7 +48,6 @@ using Floats = xsimd::batch<float, Arch>;
 using Mask = xsimd::batch_bool<float, Arch>;
 /// Unsigned 32-bit lanes, as many as Floats has (particle and constraint indices).
 using Ints = xsimd::batch<std::uint32_t, Arch>;
-using IntMask = xsimd::batch_bool<std::uint32_t, Arch>;
 inline constexpr std::size_t kLanes = Floats::size;
 static_assert(Ints::size == kLanes, "index lanes must match float lanes");
 static_assert(kLanes <= 32, "lane masks are kept in 32 bits");
