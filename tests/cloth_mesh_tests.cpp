@@ -1,4 +1,4 @@
-// Cloth meshes and mesh colliders (core/src/cloth_mesh.hpp, core/src/mesh_sdf.hpp): generated
+// Cloth meshes and mesh colliders (core/src/families/cloth/cloth_mesh.hpp, core/src/families/collider/mesh_sdf.hpp): generated
 // sheets and their topology, OBJ reading and its errors, the per-frame OBJ text, and the signed
 // distance field of a closed mesh against analytic shapes and brute force.
 #include <gtest/gtest.h>
@@ -18,8 +18,8 @@
 #include <string>
 #include <vector>
 
-#include "cloth_mesh.hpp"
-#include "mesh_sdf.hpp"
+#include "families/cloth/cloth_mesh.hpp"
+#include "families/collider/mesh_sdf.hpp"
 #include "seiche/scene_loader.hpp"
 #include "seiche/thread_count.hpp"
 

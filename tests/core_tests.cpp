@@ -10,7 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "background_writer.hpp"
+#include "run/background_writer.hpp"
 #include "seiche/output_files.hpp"
 #include "seiche/particle_store.hpp"
 #include "seiche/runner.hpp"

@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "implicit_euler.hpp"
+#include "bench/implicit_euler.hpp"
 
 using namespace seiche;
 

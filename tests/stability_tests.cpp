@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "fluid_solver.hpp"
+#include "families/fluid/fluid_solver.hpp"
 #include "seiche/scene_loader.hpp"
 #include "seiche/simulation.hpp"
 #include "seiche/stability.hpp"

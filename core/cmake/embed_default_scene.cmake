@@ -3,7 +3,7 @@
 #   include(${CMAKE_CURRENT_SOURCE_DIR}/cmake/embed_default_scene.cmake)
 #   seiche_embed_default_scene(seiche_core ${CMAKE_CURRENT_SOURCE_DIR}/../scenes/dam_break.json)
 #
-# The JSON is read at configure time and pasted into a raw string literal (core/src/
+# The JSON is read at configure time and pasted into a raw string literal (core/src/scene/
 # default_scene.cpp.in). The file is a CMAKE_CONFIGURE_DEPENDS, so editing it makes the next build
 # re-run CMake, which regenerates the source; configure_file leaves the output untouched (and the
 # object file up to date) when the JSON did not change.
@@ -23,6 +23,6 @@ function(seiche_embed_default_scene target json_file)
   set(SEICHE_SCENE_SOURCE "${json_file}")
 
   set(generated "${CMAKE_CURRENT_BINARY_DIR}/generated/default_scene.cpp")
-  configure_file("${CMAKE_CURRENT_FUNCTION_LIST_DIR}/../src/default_scene.cpp.in" "${generated}" @ONLY)
+  configure_file("${CMAKE_CURRENT_FUNCTION_LIST_DIR}/../src/scene/default_scene.cpp.in" "${generated}" @ONLY)
   target_sources(${target} PRIVATE "${generated}")
 endfunction()

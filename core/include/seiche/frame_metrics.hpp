@@ -15,7 +15,7 @@ namespace seiche {
 enum class ErrorUnit { Ratio, Radians };
 
 /// One error of a constraint family, over a frame or over a run. Each family adds its rows in
-/// Family::measure (core/src/family.hpp); the run report, the summary, the bench and the
+/// Family::measure (core/src/loop/family.hpp); the run report, the summary, the bench and the
 /// stability suite show every row they are given, so a new family needs none of them changed.
 struct ErrorRow {
   std::string key;    ///< the run report's key: "fluid_density_error", "cloth_strain", ...

@@ -1,9 +1,9 @@
 // The simulation: owns the particle store and the constraint families of a scene (fluid, cloth,
 // raw distance constraints, particle contacts, colliders, and the motion every particle has;
-// core/src/family.hpp), and steps them.
+// core/src/loop/family.hpp), and steps them.
 //
 // One substep (XPBD, "small steps") runs the stages in order, each stage the passes of every
-// family in the order of their keys (pass_order in core/src/family.hpp):
+// family in the order of their keys (pass_order in core/src/loop/family.hpp):
 //   predict          v += dt g, p = x + dt v
 //   neighbors        cell keys -> counting sort -> reorder the store -> neighbor lists;
 //                    candidate particle pairs of cloth contacts

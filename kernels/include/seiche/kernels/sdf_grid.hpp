@@ -1,5 +1,5 @@
 // A signed distance field on a dense regular grid (negative inside), sampled trilinearly: what
-// a triangle-mesh collider becomes (core/src/mesh_sdf.hpp builds it from an OBJ).
+// a triangle-mesh collider becomes (core/src/families/collider/mesh_sdf.hpp builds it from an OBJ).
 #pragma once
 
 #include <cstddef>

@@ -16,7 +16,7 @@
 
 #include <fmt/format.h>
 
-#include "cloth_mesh.hpp"
+#include "families/cloth/cloth_mesh.hpp"
 #include "json_reader.hpp"
 
 namespace seiche {

@@ -4,13 +4,13 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "blocked_reduce.hpp"
-#include "families/cloth_family.hpp"
-#include "families/collider_family.hpp"
-#include "families/contact_family.hpp"
-#include "families/distance_family.hpp"
-#include "families/fluid_family.hpp"
-#include "families/motion_family.hpp"
+#include "store/blocked_reduce.hpp"
+#include "families/cloth/cloth_family.hpp"
+#include "families/collider/collider_family.hpp"
+#include "families/contact/contact_family.hpp"
+#include "families/distance/distance_family.hpp"
+#include "families/fluid/fluid_family.hpp"
+#include "families/motion/motion_family.hpp"
 #include "family.hpp"
 
 namespace seiche {

@@ -5,7 +5,7 @@
 
 #include <tbb/parallel_for.h>
 
-#include "blocked_reduce.hpp"
+#include "store/blocked_reduce.hpp"
 #include "seiche/kernels/pbf_walls.hpp"
 #include "seiche/kernels/vorticity_confinement.hpp"
 #include "seiche/kernels/xsph_viscosity.hpp"

@@ -1,4 +1,4 @@
-#include "families/fluid_family.hpp"
+#include "fluid_family.hpp"
 
 #include <algorithm>
 #include <cmath>

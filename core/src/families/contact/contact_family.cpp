@@ -1,4 +1,4 @@
-#include "families/contact_family.hpp"
+#include "contact_family.hpp"
 
 namespace seiche {
 

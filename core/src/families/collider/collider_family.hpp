@@ -7,7 +7,7 @@
 #include <span>
 #include <vector>
 
-#include "family.hpp"
+#include "loop/family.hpp"
 #include "mesh_sdf.hpp"
 #include "seiche/kernels/collisions.hpp"
 #include "seiche/particle_store.hpp"

@@ -1,4 +1,4 @@
-#include "families/cloth_family.hpp"
+#include "cloth_family.hpp"
 
 namespace seiche {
 

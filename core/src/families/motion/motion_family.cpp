@@ -1,4 +1,4 @@
-#include "families/motion_family.hpp"
+#include "motion_family.hpp"
 
 #include <cmath>
 

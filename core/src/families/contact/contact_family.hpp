@@ -6,8 +6,8 @@
 
 #include <memory>
 
-#include "family.hpp"
-#include "neighborhood.hpp"
+#include "loop/family.hpp"
+#include "families/fluid/neighborhood.hpp"
 #include "particle_contact_stage.hpp"
 #include "seiche/particle_store.hpp"
 

@@ -1,4 +1,4 @@
-#include "families/distance_family.hpp"
+#include "distance_family.hpp"
 
 namespace seiche {
 

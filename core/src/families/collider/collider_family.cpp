@@ -1,10 +1,10 @@
-#include "families/collider_family.hpp"
+#include "collider_family.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <string>
 
-#include "cloth_mesh.hpp"
+#include "families/cloth/cloth_mesh.hpp"
 
 namespace seiche {
 

@@ -2,7 +2,7 @@
 // at its end, and velocity damping where the scene asks for it (kernels/integrate.hpp).
 #pragma once
 
-#include "family.hpp"
+#include "loop/family.hpp"
 #include "seiche/particle_store.hpp"
 #include "seiche/scene.hpp"
 

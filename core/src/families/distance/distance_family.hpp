@@ -6,7 +6,7 @@
 #include <memory>
 
 #include "distance_solver.hpp"
-#include "family.hpp"
+#include "loop/family.hpp"
 #include "seiche/particle_store.hpp"
 #include "seiche/scene.hpp"
 

@@ -11,10 +11,10 @@
 #include <fmt/format.h>
 #include <fmt/ostream.h>
 
-#include "cloth_solver.hpp"
-#include "distance_solver.hpp"
+#include "families/cloth/cloth_solver.hpp"
+#include "families/distance/distance_solver.hpp"
 #include "implicit_reference.hpp"
-#include "progress.hpp"
+#include "run/progress.hpp"
 #include "seiche/kernels/simd_info.hpp"
 #include "seiche/simulation.hpp"
 #include "seiche/thread_count.hpp"

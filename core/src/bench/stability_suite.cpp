@@ -10,7 +10,7 @@
 #include <fmt/format.h>
 #include <fmt/ostream.h>
 
-#include "progress.hpp"
+#include "run/progress.hpp"
 #include "seiche/scene_loader.hpp"
 #include "seiche/simulation.hpp"
 #include "seiche/thread_count.hpp"

@@ -1,7 +1,7 @@
 #include "implicit_reference.hpp"
 
-#include "cloth_solver.hpp"
-#include "distance_solver.hpp"
+#include "families/cloth/cloth_solver.hpp"
+#include "families/distance/distance_solver.hpp"
 
 namespace seiche {
 

@@ -4,7 +4,7 @@
 
 #include <vector>
 
-#include "cloth_mesh.hpp"
+#include "families/cloth/cloth_mesh.hpp"
 #include "seiche/kernels/sdf_grid.hpp"
 
 namespace seiche {

@@ -15,8 +15,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "cloth_solver.hpp"
-#include "neighborhood.hpp"
+#include "families/cloth/cloth_solver.hpp"
+#include "families/fluid/neighborhood.hpp"
 #include "seiche/kernels/particle_contacts.hpp"
 #include "seiche/neighbor/cell_grid.hpp"
 #include "seiche/particle_store.hpp"

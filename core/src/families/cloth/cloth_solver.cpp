@@ -8,7 +8,7 @@
 
 #include <fmt/format.h>
 
-#include "blocked_reduce.hpp"
+#include "store/blocked_reduce.hpp"
 #include "seiche/kernels/dihedral_bending.hpp"
 #include "seiche/kernels/phase.hpp"
 

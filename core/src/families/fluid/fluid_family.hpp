@@ -14,7 +14,7 @@
 #include <memory>
 #include <span>
 
-#include "family.hpp"
+#include "loop/family.hpp"
 #include "fluid_error_probe.hpp"
 #include "fluid_solver.hpp"
 #include "neighborhood.hpp"
