@@ -11,7 +11,11 @@
 #include <string>
 #include <vector>
 
+#include "families/cloth/cloth_mesh.hpp"
+#include "scene/scene_format_doc.hpp"
+#include "scene/scene_section.hpp"
 #include "seiche/scene_loader.hpp"
+#include "seiche/simulation.hpp"
 
 namespace seiche {
 namespace {
@@ -763,6 +767,83 @@ TEST(SceneFormatDoc, ExampleIsAValidScene) {
   EXPECT_NEAR(s.solver.frame_dt, defaults.frame_dt, 1e-6);
   defaults.frame_dt = s.solver.frame_dt;
   expect_same(s.solver, defaults);
+}
+
+// docs/scene-format.md's key tables are generated from the readers' key tables (scene keys
+// declared once); the page must be the regenerated page. On a difference the regenerated page
+// is written to the temp folder, to be copied over docs/scene-format.md.
+TEST(SceneFormatDoc, KeyTablesMatchTheReaders) {
+  const fs::path doc = repository_root() / "docs" / "scene-format.md";
+  ASSERT_TRUE(fs::exists(doc)) << doc;
+  const std::string text = read_text(doc);
+  const std::string regenerated = detail::regenerate_scene_format(text);
+  if (regenerated != text) {
+    const fs::path out = fs::temp_directory_path() / "scene-format.md";
+    std::ofstream(out, std::ios::binary) << regenerated;
+    FAIL() << doc << " differs from the key tables of the scene readers; the regenerated page is " << out
+           << " (copy it over the doc after checking the difference)";
+  }
+}
+
+// The generator renders each key from its table: type, unit, the struct's default, the range.
+TEST(SceneFormatDoc, RowsRenderTheTableValues) {
+  const std::string doc = detail::regenerate_scene_format(read_text(repository_root() / "docs" / "scene-format.md"));
+  EXPECT_NE(doc.find("| `substeps` | integer | – | `8` | 1 … 10000 | XPBD substeps per frame |"), std::string::npos);
+  EXPECT_NE(doc.find("| `spacing` | float | m | `0.02` | > 0 | particle spacing |"), std::string::npos);
+  EXPECT_NE(doc.find("| `gravity` | vec3 | m/s² | `[0, -9.81, 0]` | finite |"), std::string::npos);
+  EXPECT_NE(doc.find("| `tensile_dq` | float | – | `0.2` | in (0, 1) |"), std::string::npos);
+  EXPECT_NE(doc.find("| `capsule.radius` | float | m | **required** | > 0 | radius |"), std::string::npos);
+  EXPECT_NE(doc.find("| `bending` | string | – | `\"dihedral\"` | `\"dihedral\"` or `\"isometric\"` |"),
+            std::string::npos);
+}
+
+TEST(SceneFormatDoc, MarkersMustNameEveryTableOnce) {
+  // A page without markers leaves every table without a place.
+  EXPECT_THROW(detail::regenerate_scene_format("# Scene format\n"), std::runtime_error);
+  // A marker naming no table, and a marker without its end.
+  const std::string page = read_text(repository_root() / "docs" / "scene-format.md");
+  EXPECT_THROW(detail::regenerate_scene_format(page + "<!-- scene-keys: nope -->\n<!-- /scene-keys -->\n"),
+               std::runtime_error);
+  EXPECT_THROW(detail::regenerate_scene_format(page + "<!-- scene-keys: solver -->\n"), std::runtime_error);
+}
+
+// The reader registry: every section's key is a root key, read by the section's row.
+TEST(SceneSections, EverySectionIsARootKey) {
+  std::vector<std::string> keys;
+  for (const detail::SceneSection& s : detail::scene_sections()) {
+    keys.emplace_back(s.key);
+    const std::string empty = s.is_array ? "[]" : "{}";
+    EXPECT_NO_THROW(load("{\"" + std::string(s.key) + "\": " + empty + "}")) << s.key;
+  }
+  EXPECT_EQ(keys, (std::vector<std::string>{"solver", "domain", "output", "fluids", "particles",
+                                            "distance_constraints", "colliders", "cloths"}));
+}
+
+// OBJ meshes are read once, by the loader: the cloth solver and the collider's SDF use the mesh
+// kept in the definition, so the simulation builds even after the files are gone.
+TEST(SceneLoaderFile, MeshesAreReadOnceAtLoad) {
+  const TempDir dir;
+  const fs::path meshes = repository_root() / "scenes" / "meshes";
+  fs::copy_file(meshes / "cloth_disc.obj", dir.path() / "disc.obj");
+  fs::copy_file(meshes / "cube.obj", dir.path() / "cube.obj");
+  const fs::path scene_file = dir.write("meshes.json", R"({
+    "domain": { "min": [-2, -2, -2], "max": [2, 2, 2] },
+    "colliders": [ { "mesh": { "file": "cube.obj", "scale": 0.5 } } ],
+    "cloths": [ { "mesh": { "file": "disc.obj", "translate": [0, 1, 0] } } ] })");
+  const SceneDef scene = load_scene_file(scene_file);
+  ASSERT_EQ(scene.cloths.size(), 1u);
+  ASSERT_EQ(scene.colliders.size(), 1u);
+  ASSERT_TRUE(scene.cloths[0].loaded_mesh && scene.cloths[0].loaded_topology);
+  ASSERT_TRUE(scene.colliders[0].loaded_mesh);
+  const ClothMesh disc = read_obj_mesh(meshes / "cloth_disc.obj", *scene.cloths[0].mesh, "cloths[0].mesh");
+  EXPECT_EQ(scene.cloths[0].loaded_mesh->positions, disc.positions);
+  EXPECT_EQ(scene.colliders[0].loaded_mesh->vertex_count(), 8u);
+  EXPECT_EQ(scene.colliders[0].loaded_mesh->positions[0], (Vec3{-0.25f, -0.25f, -0.25f}));
+
+  fs::remove(dir.path() / "disc.obj");
+  fs::remove(dir.path() / "cube.obj");
+  const Simulation sim(scene);
+  EXPECT_EQ(sim.particles().size(), disc.vertex_count());
 }
 
 }  // namespace

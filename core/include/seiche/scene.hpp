@@ -1,9 +1,13 @@
 // The scene definition: plain structs with documented defaults and units. The JSON scene format
 // (docs/scene-format.md) maps 1:1 onto these structs: a key's name is the member's name, and a
-// key left out takes the default written here. Keep the two in step.
+// key left out takes the default written here. Each struct's keys (unit, range, documentation)
+// are declared once, in the key table of its section's reader (core/src/scene/ for solver,
+// domain and output; core/src/families/<family>/<family>_reader.cpp for the others), from which
+// the loader checks the input and docs/scene-format.md's key tables are generated.
 #pragma once
 
 #include <array>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -11,6 +15,9 @@
 namespace seiche {
 
 using Vec3 = std::array<float, 3>;
+
+struct ClothMesh;      // core/src/families/cloth/cloth_mesh.hpp
+struct ClothTopology;  // core/src/families/cloth/cloth_mesh.hpp
 
 /// "solver": time stepping and the fluid solver's numerical settings.
 struct SolverDef {
@@ -127,6 +134,12 @@ struct ClothDef {
   std::vector<int> pins;            ///< vertex indices pinned (mass 0)
   std::optional<BoxDef> pin_box;    ///< vertices inside this box (rest positions) are pinned too
   Vec3 velocity{0.0f, 0.0f, 0.0f};  ///< m/s, initial velocity of every vertex
+
+  /// Not a key: the mesh (sheet or OBJ) and its topology as the loader built them to check the
+  /// cloth, so that the cloth solver does not build them again. Null in a definition made in
+  /// code; the solver then builds them.
+  std::shared_ptr<const ClothMesh> loaded_mesh;
+  std::shared_ptr<const ClothTopology> loaded_topology;
 };
 
 /// One entry of "colliders": exactly one of "plane", "box", "sphere", "capsule", "mesh", plus a
@@ -144,6 +157,9 @@ struct ColliderDef {
   ClothMeshDef mesh;              ///< mesh: a closed OBJ triangle mesh, placed like a cloth's
   float voxel_size = 0.0f;        ///< mesh: SDF sample spacing (m); 0 = 1/64 of its largest side
   float friction = 0.0f;          ///< Coulomb friction coefficient (>= 0)
+  /// Not a key: a mesh collider's OBJ as the loader read it to check it, so that the collider's
+  /// SDF does not read it again. Null in a definition made in code; the SDF then reads the file.
+  std::shared_ptr<const ClothMesh> loaded_mesh;
 };
 
 /// "output": what a run or a bake writes (the command line overrides frames).

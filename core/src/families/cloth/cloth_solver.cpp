@@ -107,7 +107,10 @@ void grow_shortest_path_forest(const ClothShape& shape, std::size_t base, std::s
 ClothShape build_cloth_shape(const ClothDef& cloth, std::size_t index, const std::string& file) {
   const std::string path = fmt::format("cloths[{}]", index);
   ClothShape s;
-  if (cloth.mesh) {
+  if (cloth.loaded_mesh && cloth.loaded_topology) {  // built once by the scene loader
+    s.mesh = *cloth.loaded_mesh;
+    s.topology = *cloth.loaded_topology;
+  } else if (cloth.mesh) {
     s.mesh = read_obj_mesh(cloth.mesh->file, *cloth.mesh, path + ".mesh");
     s.topology = build_topology(s.mesh, cloth.mesh->file, path + ".mesh.file");
   } else {

@@ -14,7 +14,9 @@ namespace {
 // says otherwise, over the mesh's box grown by 4 samples.
 std::unique_ptr<MeshSdf> build_collider_sdf(const ColliderDef& c, std::size_t index) {
   const std::string path = "colliders[" + std::to_string(index) + "].mesh";
-  const ClothMesh mesh = read_obj_mesh(c.mesh.file, c.mesh, path);
+  // The OBJ as the scene loader read it; a definition made in code has none: read the file.
+  const ClothMesh read_here = c.loaded_mesh ? ClothMesh{} : read_obj_mesh(c.mesh.file, c.mesh, path);
+  const ClothMesh& mesh = c.loaded_mesh ? *c.loaded_mesh : read_here;
   float voxel = c.voxel_size;
   if (voxel <= 0.0f) {
     float extent = 0.0f;

@@ -1,0 +1,147 @@
+// The "solver", "domain" and "output" sections: their key tables and readers. Rules that are
+// not a range of one key (a substep not too short, min < max) are checked after the table.
+#include "core_sections.hpp"
+
+#include <algorithm>
+
+#include <fmt/format.h>
+
+#include "shared_keys.hpp"
+
+namespace seiche::detail {
+
+namespace {
+
+constexpr double kMaxStepsPerFrame = 10000;  // substeps and iterations: more is a typo
+constexpr double kMinSubstep = 1e-6;         // s: below this, float time steps underflow
+
+const KeyTable<SolverDef>& solver_keys() {
+  using K = Key<SolverDef>;
+  static const KeyTable<SolverDef> keys{
+      K("frame_dt", &SolverDef::frame_dt, Range::above(0))
+          .unit("s")
+          .default_text("`1/60` (0.016666…)")
+          .valid_note("and `frame_dt / substeps` ≥ 1e-6")
+          .doc("time per output frame"),
+      K("substeps", &SolverDef::substeps, Range::closed(1, kMaxStepsPerFrame)).doc("XPBD substeps per frame"),
+      K("iterations", &SolverDef::iterations, Range::closed(1, kMaxStepsPerFrame))
+          .doc("constraint iterations per substep (the least; see `density_tolerance`)"),
+      K("density_tolerance", &SolverDef::density_tolerance, Range::half_open(0, 1))
+          .doc("the fluid's mean density error the iterations aim for: after `iterations`, a substep "
+               "iterates on while the mean of max(ρ/ρ0 − 1, 0) over the fluid, measured at the start of "
+               "its last iteration, is above it (1 % by default: ordinary scenes never need more, impacts "
+               "and long substeps do); 0 = exactly `iterations`. Scenes without fluid ignore it"),
+      K("max_iterations", &SolverDef::max_iterations, Range::closed(1, kMaxStepsPerFrame))
+          .doc("the most iterations a substep runs for `density_tolerance` (never fewer than "
+               "`iterations`)"),
+      K("gravity", &SolverDef::gravity).unit("m/s²").doc("gravitational acceleration"),
+      K("relaxation", &SolverDef::relaxation, Range::at_least(0))
+          .doc("PBF constraint-force mixing ε, relative to the λ denominator of a particle with a full "
+               "rest neighborhood; larger is softer and more stable (below about 0.3 a single iteration "
+               "per substep overshoots and gains energy; tall fluid columns need 2 iterations even at "
+               "0.3)"),
+      K("damping", &SolverDef::damping, Range::at_least(0))
+          .unit("1/s")
+          .doc("velocity damping c: v ← v·exp(−c·dt) every substep (free particles); 0 = off, no pass"),
+      K("tensile_k", &SolverDef::tensile_k, Range::at_least(0))
+          .doc("artificial pressure s_corr = −k (W(r) / W(dq·h))ⁿ / D0 (PBF eq. 13; D0 as for "
+               "`relaxation`, so k is the compression this repulsion is worth at r = dq·h), given for a "
+               "substep of 1/480 s (the default 1/60 s frame in 8 substeps) and scaled by (dt·480)², at "
+               "most 1, so that it is the same force at any shorter substep; 0 turns it off. Half the "
+               "paper's 0.1, which made colliding fluid gain energy at 1/480 s (docs/design.md)"),
+      K("tensile_n", &SolverDef::tensile_n, Range::closed(1, 8)).doc("the exponent n of s_corr"),
+      K("tensile_dq", &SolverDef::tensile_dq, Range::open(0, 1))
+          .doc("dq of s_corr as a fraction of the kernel radius h"),
+  };
+  return keys;
+}
+
+void read_solver(JsonReader r, SceneDef& scene) {
+  SolverDef s = read_object(r, solver_keys());
+  if (s.frame_dt / s.substeps < kMinSubstep)
+    r.fail_at("frame_dt", fmt::format("gives substeps of {} s (frame_dt / substeps); the smallest is {} s",
+                                      s.frame_dt / s.substeps, kMinSubstep));
+  scene.solver = s;
+}
+
+const KeyTable<DomainDef>& domain_keys() {
+  using K = Key<DomainDef>;
+  static const KeyTable<DomainDef> keys{
+      K("min", &DomainDef::min).unit("m").valid_note("< `max` on every axis").doc("lower corner"),
+      K("max", &DomainDef::max).unit("m").valid_note("> `min` on every axis").doc("upper corner"),
+      K("friction", &DomainDef::friction, Range::at_least(0))
+          .doc("Coulomb friction coefficient of the walls"),
+  };
+  return keys;
+}
+
+void read_domain(JsonReader r, SceneDef& scene) {
+  DomainDef d = read_object(r, domain_keys());
+  for (int a = 0; a < 3; ++a) {
+    if (!(d.min[a] < d.max[a]))
+      r.fail_here(fmt::format("min must be < max on every axis, but along {} min = {} and max = {}", kAxis[a],
+                              d.min[a], d.max[a]));
+  }
+  scene.domain = d;
+}
+
+const KeyTable<OutputDef>& output_keys() {
+  using K = Key<OutputDef>;
+  static const KeyTable<OutputDef> keys{
+      K("frames", &OutputDef::frames, Range::at_least(1)).doc("number of frames to simulate"),
+      K("checkpoint_every", &OutputDef::checkpoint_every, Range::at_least(1))
+          .doc("bake: frames between checkpoints of the simulation state (`seiche bake --resume`)"),
+      K("particles", &OutputDef::particles).doc("bake: `particles.%04d.ply` per frame"),
+      nested<OutputDef>("vdb", "array of strings")
+          .default_text("`[\"surface\", \"density\"]`")
+          .valid_note("each of `\"surface\"`, `\"density\"`, `\"points\"`, `\"v\"`, at most once")
+          .doc("bake: the grids of `<name>.%04d.vdb`; `[]` writes no .vdb files"),
+      K("mesh", &OutputDef::mesh).doc("bake: `<name>.%04d.obj`, the fluid surface as a triangle mesh"),
+      K("voxel_size", &OutputDef::voxel_size, Range::at_least(0))
+          .unit("m")
+          .default_text("`0` (automatic)")
+          .doc("voxel size of the grids; 0 = half the fluid spacing"),
+      K("anisotropic", &OutputDef::anisotropic)
+          .doc("anisotropic surface (Yu & Turk 2013): flat sheets and sharp edges instead of blobby "
+               "spheres"),
+      K("half_float", &OutputDef::half_float)
+          .doc("store float grids as 16-bit halves (half the file size)"),
+      K("compression", &OutputDef::compression)
+          .choices({"blosc", "zip", "none"})
+          .doc("compression of the .vdb files"),
+  };
+  return keys;
+}
+
+void read_output(JsonReader r, SceneDef& scene) {
+  OutputDef o;
+  read_keys(r, output_keys(), o);
+  std::vector<std::string> grids{"surface", "density"};
+  r.read_string_set("vdb", grids, {"surface", "density", "points", "v"});
+  r.finish();
+  auto listed = [&](const char* g) { return std::find(grids.begin(), grids.end(), g) != grids.end(); };
+  o.vdb_surface = listed("surface");
+  o.vdb_density = listed("density");
+  o.vdb_points = listed("points");
+  o.vdb_velocity = listed("v");
+  scene.output = o;
+}
+
+}  // namespace
+
+SceneSection solver_section() {
+  return {"solver", false, "time stepping and the solvers' numerical settings", read_solver, nullptr,
+          [] { return std::vector<KeyTableDoc>{{"solver", key_docs(solver_keys())}}; }};
+}
+
+SceneSection domain_section() {
+  return {"domain", false, "the box that holds every particle", read_domain, nullptr,
+          [] { return std::vector<KeyTableDoc>{{"domain", key_docs(domain_keys())}}; }};
+}
+
+SceneSection output_section() {
+  return {"output", false, "what a run or a bake writes", read_output, nullptr,
+          [] { return std::vector<KeyTableDoc>{{"output", key_docs(output_keys())}}; }};
+}
+
+}  // namespace seiche::detail
