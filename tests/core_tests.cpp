@@ -10,6 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "loop/iteration_record.hpp"
 #include "run/background_writer.hpp"
 #include "seiche/output_files.hpp"
 #include "seiche/particle_store.hpp"
@@ -87,6 +88,37 @@ TEST(ParticleStore, ReorderMovesEveryStateColumnByOnePermutation) {
 }
 
 // ---- Scenes through the simulation ---------------------------------------------------------------
+
+TEST(IterationRecord, PacksOrUnpacksOnlyWhenTheOtherLayoutWasWrittenLast) {
+  ParticleStore s;
+  s.resize(6);
+  for (std::size_t i = 0; i < 6; ++i) s.px[i] = float(i), s.py[i] = 10.0f + float(i), s.pz[i] = -float(i), s.w[i] = 0.5f;
+  const kernels::ParticleView p = particle_view(s);
+  IterationRecord record;
+  record.reset({2, 4});
+  EXPECT_EQ(record.current(), Layout::Columns);
+  record.prepare(Layout::Packed, p);  // packs
+  const kernels::Float4* r = record.packed().by_index();
+  EXPECT_EQ(r[3].x, 3.0f);
+  EXPECT_EQ(r[3].y, 13.0f);
+  EXPECT_EQ(r[3].z, -3.0f);
+  EXPECT_EQ(r[3].w, 0.5f);
+  record.packed().by_index()[3].x = 7.0f;  // a packed pass writes a record
+  record.prepare(Layout::Packed, p);       // the next packed pass: no pack over it
+  EXPECT_EQ(r[3].x, 7.0f);
+  record.prepare(Layout::Columns, p);  // unpacks the range, nothing outside it
+  EXPECT_EQ(s.px[3], 7.0f);
+  EXPECT_EQ(s.px[5], 5.0f);
+  EXPECT_EQ(record.current(), Layout::Columns);
+  s.px[3] = 8.0f;  // a column pass writes
+  record.prepare(Layout::Columns, p);  // no unpack over it
+  EXPECT_EQ(s.px[3], 8.0f);
+  record.prepare(Layout::Packed, p);  // packs the new value
+  EXPECT_EQ(r[3].x, 8.0f);
+  record.reset({0, 5});  // after a reorder: the columns are the positions again
+  EXPECT_EQ(record.current(), Layout::Columns);
+  EXPECT_EQ(record.range().size(), 6u);
+}
 
 TEST(Simulation, SeedWorkedExampleAfterOneFrame) {
   Simulation sim(load_scene_file(scene_path("seed_example.json")));

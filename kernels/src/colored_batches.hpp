@@ -12,8 +12,8 @@
 //
 // The solves work on the particles packed as (px, py, pz, w) records (PackedPositions,
 // packed_positions.hpp): a lane's particle is one 16-byte load and one 16-byte store. The
-// ParticleView entry points pack and unpack around one family (solve_packed below); the cloth
-// packs once for all its families.
+// ParticleView entry points pack and unpack around one family (solve_packed below); the
+// simulation packs once for all the families it solves in a row (its iteration record).
 //
 // The families' steps are templates on the number type T (float or Floats), with the small
 // vector type and overloads below, so that they read as the scalar formulas they are; the
@@ -155,7 +155,7 @@ void solve_colored(Float4* records, std::span<const std::uint32_t> color_start,
 
 /// One family solved on its own: packs the range its index columns use, runs
 /// solve(PackedPositions&), unpacks. The entry points that take a ParticleView use it (a family
-/// solved once, or a test); the cloth keeps its PackedPositions across families instead.
+/// solved once, or a test); the simulation keeps one PackedPositions across families instead.
 template <class Solve>
 void solve_packed(const ParticleView& p,
                   std::initializer_list<std::span<const std::uint32_t>> columns, Solve&& solve) {

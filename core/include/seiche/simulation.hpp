@@ -30,12 +30,16 @@
 
 namespace seiche {
 
+namespace kernels {
+class PackedPositions;
+}
 class DistanceSolver;
 class ClothSolver;
 class Family;
 class FluidFamily;
 class DistanceFamily;
 class ClothFamily;
+class IterationRecord;
 struct Pass;
 
 /// Whether Simulation::step_frame measures the frame (FrameMetrics). Measuring never changes
@@ -48,6 +52,9 @@ struct StepContext {
   float dt = 0.0f;  ///< substep length (s)
   int substep = 0;
   int iteration = 0;
+  /// The iteration record (core/src/loop/iteration_record.hpp), current during a pass that
+  /// declares Layout::Packed; the loop packs and unpacks it, a pass never does.
+  const kernels::PackedPositions* packed = nullptr;
 };
 
 class Simulation {
@@ -107,6 +114,8 @@ class Simulation {
   bool a_family_wants_iteration() const;
   /// Reorders the store (new k = old order[k]) and remaps every index held elsewhere.
   void reorder(std::span<const std::uint32_t> order);
+  /// The iteration record's range: the union of the families' packed ranges.
+  void reset_record_range();
   /// The frame's constraint errors on top of state_metrics(). Reads the state and writes only
   /// measuring scratch, so that it cannot change what the next substep computes.
   FrameMetrics measure();
@@ -125,6 +134,9 @@ class Simulation {
   // stage_begin_[s + 1]).
   std::vector<Pass> passes_;
   std::vector<std::size_t> stage_begin_;
+  // The predicted positions packed for the passes that gather (the store's px, py, pz own them);
+  // run_stage packs and unpacks it between passes by their Layout.
+  std::unique_ptr<IterationRecord> record_;
   int iteration_cap_ = 1;  // max(iterations, max_iterations) when a family votes, else iterations
   std::size_t moved_into_domain_ = 0;
   int frame_ = 0;

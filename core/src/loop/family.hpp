@@ -6,6 +6,8 @@
 // stage; Simulation::substep() runs the stages in order and, in each, the passes of every family
 // in the order of their keys. The keys of all families are in one table (pass_order below), so
 // the whole substep reads in one place, and the run report's pipeline list is the same table.
+// A pass works on the store's columns or on the packed iteration record (Layout,
+// iteration_record.hpp); the loop packs or unpacks between passes, never a family.
 // After the store is reordered, every family remaps the particle indices it holds; after the
 // fixed iterations, families may vote for more (the fluid's density tolerance); at the end of a
 // frame, each measures the error of its constraints.
@@ -16,7 +18,9 @@
 #include <span>
 #include <vector>
 
+#include "iteration_record.hpp"
 #include "seiche/frame_metrics.hpp"
+#include "seiche/kernels/packed_positions.hpp"
 #include "seiche/simulation.hpp"
 
 namespace seiche {
@@ -41,8 +45,9 @@ inline constexpr int kDistanceReset = 0;     // BeginSubstep
 inline constexpr int kClothReset = 10;
 inline constexpr int kFluidDensity = 0;      // Iterate
 inline constexpr int kDistance = 10;
-inline constexpr int kClothStretch = 20;
-inline constexpr int kClothBending = 21;     //   directly after stretch: it reads what stretch packed
+inline constexpr int kClothStretchForests = 19;  // on the columns, before the colored edges
+inline constexpr int kClothStretch = 20;     //   distance, stretch and bending share one pack
+inline constexpr int kClothBending = 21;
 inline constexpr int kTethers = 22;
 inline constexpr int kParticleContacts = 30;
 inline constexpr int kCollisions = 100;      //   last: nothing is pushed into a collider after it
@@ -58,6 +63,9 @@ struct Pass {
   int order;         ///< within the stage, ascending (pass_order)
   bool reported;     ///< timed and listed in the pipeline (a per-substep reset is neither)
   std::function<void(const StepContext&)> run;
+  /// Where it reads and writes the predicted positions: Packed passes get the iteration record
+  /// as StepContext::packed (current when they run), and may write only its positions.
+  Layout layout = Layout::Columns;
 };
 
 class Family {
@@ -67,6 +75,9 @@ class Family {
   virtual void add_passes(std::vector<Pass>& passes) = 0;
   /// After the store was reordered: new_index[old] for every particle index the family holds.
   virtual void remap(std::span<const std::uint32_t> new_index) { (void)new_index; }
+  /// The store indices its Layout::Packed passes gather (empty without such passes): the
+  /// iteration record covers the union of the families' ranges. Asked again after a reorder.
+  virtual kernels::IndexRange packed_range() const { return {}; }
   /// Whether this family may ask for iterations past solver.iterations (up to max_iterations).
   virtual bool votes_on_iterations() const { return false; }
   /// After an iteration, from the fixed count on: whether this family wants another.

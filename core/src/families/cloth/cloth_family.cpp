@@ -5,15 +5,18 @@ namespace seiche {
 void ClothFamily::add_passes(std::vector<Pass>& passes) {
   passes.push_back({"cloth", Stage::BeginSubstep, pass_order::kClothReset, false,
                     [this](const StepContext&) { solver_->begin_substep(); }});
-  passes.push_back({"cloth stretch", Stage::Iterate, pass_order::kClothStretch, true, [this](const StepContext& c) {
-                      solver_->solve_stretch(particle_view(store_), c.dt, c.iteration);
-                    }});
-  // Bending directly follows stretch (pass_order): the stretch pass leaves the positions packed
-  // for it, and px, py, pz are stale until bending unpacks them (ClothSolver::solve_stretch).
+  // Stretch in two passes under one name: the forests on the columns, then the colored edges on
+  // the iteration record, which bending goes on with (one pack for both, done by the loop).
+  if (solver_->has_stretch_forests())
+    passes.push_back({"cloth stretch", Stage::Iterate, pass_order::kClothStretchForests, true,
+                      [this](const StepContext& c) { solver_->solve_stretch_forests(particle_view(store_), c.dt); }});
+  passes.push_back({"cloth stretch", Stage::Iterate, pass_order::kClothStretch, true,
+                    [this](const StepContext& c) { solver_->solve_stretch(*c.packed, c.dt, c.iteration); },
+                    Layout::Packed});
   if (solver_->has_bending())
-    passes.push_back({"cloth bending", Stage::Iterate, pass_order::kClothBending, true, [this](const StepContext& c) {
-                        solver_->solve_bending(particle_view(store_), c.dt, c.iteration);
-                      }});
+    passes.push_back({"cloth bending", Stage::Iterate, pass_order::kClothBending, true,
+                      [this](const StepContext& c) { solver_->solve_bending(*c.packed, c.dt, c.iteration); },
+                      Layout::Packed});
   if (solver_->has_tethers())
     passes.push_back({"tethers", Stage::Iterate, pass_order::kTethers, true,
                       [this](const StepContext&) { solver_->solve_tethers(particle_view(store_)); }});

@@ -1,6 +1,7 @@
 // The cloths of a scene (cloth_solver.hpp): their vertices in the store, the XPBD multipliers
-// reset every substep, stretch, bending and tethers every iteration, the constraints' particle
-// indices remapped after a reorder, strain and bending error measured at the end of a frame.
+// reset every substep, stretch, bending and tethers every iteration (the colored stretch and
+// bending on the iteration record), the constraints' particle indices remapped after a reorder,
+// strain and bending error measured at the end of a frame.
 #pragma once
 
 #include <memory>
@@ -28,6 +29,7 @@ class ClothFamily final : public Family {
 
   void add_passes(std::vector<Pass>& passes) override;
   void remap(std::span<const std::uint32_t> new_index) override { solver_->remap(new_index); }
+  kernels::IndexRange packed_range() const override { return solver_->packed_range(); }
   void measure(FrameMetrics& m) override;
 
  private:

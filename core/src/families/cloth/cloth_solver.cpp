@@ -202,13 +202,12 @@ void ClothSolver::create(ParticleStore& store, std::size_t first, const kernels:
   if (!bend_dihedral.empty()) kernels::build_dihedral_bending(hinge_dihedral, bend_dihedral, view, dihedral_);
   if (!bend_isometric.empty())
     kernels::build_isometric_bending(hinge_isometric, bend_isometric, view, isometric_);
-  reset_packed_range();
 }
 
-void ClothSolver::reset_packed_range() {
+kernels::IndexRange ClothSolver::packed_range() const {
   const kernels::Hinges& iso = isometric_.hinges;
-  packed_.reset(kernels::index_range({stretch_.i, stretch_.j, dihedral_.a, dihedral_.b, dihedral_.c,
-                                      dihedral_.d, iso.a, iso.b, iso.c, iso.d}));
+  return kernels::index_range({stretch_.i, stretch_.j, dihedral_.a, dihedral_.b, dihedral_.c, dihedral_.d,
+                               iso.a, iso.b, iso.c, iso.d});
 }
 
 // Each free vertex is tied to its kTethersPerVertex nearest pinned vertices of the same cloth, at
@@ -278,17 +277,14 @@ void ClothSolver::begin_substep() {
 }
 
 // The forests first: they carry the load to the pins; then Gauss-Seidel over all edges.
-void ClothSolver::solve_stretch(const kernels::ParticleView& p, float dt, int iteration) {
+void ClothSolver::solve_stretch_forests(const kernels::ParticleView& p, float dt) {
   for (kernels::DistanceForest& f : forests_) kernels::solve_distance_forest(p, stretch_, f, dt, tension_.data());
-  packed_.pack(p);
+}
+
+void ClothSolver::solve_stretch(const kernels::PackedPositions& packed, float dt, int iteration) {
   const bool first_solve = iteration == 0 && forests_.empty();
   kernels::solve_distance_constraints(
-      packed_, stretch_, dt,
-      first_solve ? kernels::Multipliers::Restart : kernels::Multipliers::Accumulate);
-  if (has_bending())
-    packed_ahead_ = true;  // solve_bending goes on with the records and writes them back
-  else
-    packed_.unpack(p);
+      packed, stretch_, dt, first_solve ? kernels::Multipliers::Restart : kernels::Multipliers::Accumulate);
 }
 
 std::span<const float> ClothSolver::stretch_multipliers() const {
@@ -300,14 +296,11 @@ void ClothSolver::restore_stretch_multipliers(std::span<const float> saved) {
   std::copy(saved.begin(), saved.end(), stretch_.lambda.begin());
 }
 
-void ClothSolver::solve_bending(const kernels::ParticleView& p, float dt, int iteration) {
-  if (!packed_ahead_) packed_.pack(p);
+void ClothSolver::solve_bending(const kernels::PackedPositions& packed, float dt, int iteration) {
   const auto start =
       iteration == 0 ? kernels::Multipliers::Restart : kernels::Multipliers::Accumulate;
-  if (dihedral_.size()) kernels::solve_dihedral_bending(packed_, dihedral_, dt, start);
-  if (isometric_.size()) kernels::solve_isometric_bending(packed_, isometric_, dt, start);
-  packed_.unpack(p);
-  packed_ahead_ = false;
+  if (dihedral_.size()) kernels::solve_dihedral_bending(packed, dihedral_, dt, start);
+  if (isometric_.size()) kernels::solve_isometric_bending(packed, isometric_, dt, start);
 }
 
 void ClothSolver::solve_tethers(const kernels::ParticleView& p) { kernels::solve_tethers(p, tethers_); }
@@ -319,7 +312,6 @@ void ClothSolver::remap(std::span<const std::uint32_t> new_index) {
   isometric_.hinges.remap(new_index);
   tethers_.remap(new_index);
   for (auto& f : forests_) f.remap(new_index);
-  reset_packed_range();
 }
 
 ClothError ClothSolver::measure(const kernels::ParticleView& p) const {

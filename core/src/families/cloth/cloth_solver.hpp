@@ -76,14 +76,16 @@ class ClothSolver {
   bool adjacent(std::size_t c, std::uint32_t u, std::uint32_t v) const;
 
   void begin_substep();
-  /// One iteration of the stretch constraints (iteration counts from 0 in each substep): the
-  /// forests on the store's columns, then the colored edges on the packed positions, which stay
-  /// packed for solve_bending when the cloths bend (the bending pass directly follows this one,
-  /// Simulation::assemble_pipeline), so px, py, pz are behind until then; else they are written
-  /// back here.
-  void solve_stretch(const kernels::ParticleView& p, float dt, int iteration);
-  /// One iteration of the bending constraints on the packed positions; writes them back.
-  void solve_bending(const kernels::ParticleView& p, float dt, int iteration);
+  bool has_stretch_forests() const { return !forests_.empty(); }
+  /// One iteration of the stretch constraints (iteration counts from 0 in each substep), in two
+  /// parts: first the forests, on the store's columns; then the colored edges, on the iteration
+  /// record (core/src/loop/iteration_record.hpp: its range covers packed_range()).
+  void solve_stretch_forests(const kernels::ParticleView& p, float dt);
+  void solve_stretch(const kernels::PackedPositions& packed, float dt, int iteration);
+  /// One iteration of the bending constraints, on the iteration record.
+  void solve_bending(const kernels::PackedPositions& packed, float dt, int iteration);
+  /// Every store index the colored constraints (stretch and bending) use.
+  kernels::IndexRange packed_range() const;
   void solve_tethers(const kernels::ParticleView& p);
   void remap(std::span<const std::uint32_t> new_index);
   /// The stretch multipliers of the last substep when there are forests (their geometric
@@ -100,8 +102,6 @@ class ClothSolver {
 
  private:
   void build_tethers(std::size_t c, std::size_t first, std::span<const std::uint8_t> pinned);
-  /// The packed range: every store index the colored constraints use.
-  void reset_packed_range();
 
   std::vector<ClothDef> scene_cloths_;
   std::vector<ClothShape> shapes_;
@@ -115,10 +115,6 @@ class ClothSolver {
   kernels::Tethers tethers_;  // all cloths' tethers, appended cloth by cloth
   std::vector<kernels::DistanceForest> forests_;  // cloth stretch_forests (kernels/distance_tree.hpp)
   std::vector<float> tension_;  // stretch multipliers of the previous substep
-  // Positions and inverse masses for the colored solves, packed once per iteration for stretch
-  // and bending (kernels/packed_positions.hpp); its range is kept from create and remap.
-  kernels::PackedPositions packed_;
-  bool packed_ahead_ = false;  // the records hold newer positions than px, py, pz
 };
 
 }  // namespace seiche

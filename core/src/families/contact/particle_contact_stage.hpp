@@ -53,7 +53,9 @@ class ParticleContactStage {
   float domain_min_[3] = {0, 0, 0}, domain_max_[3] = {0, 0, 0};
   neighbor::CellGrid grid_;
   std::vector<std::uint8_t> in_grid_;
-  std::vector<kernels::Float4> sorted_;  // cloth particles in grid order: x, y, z, (unused)
+  // Scratch of the candidate search, rebuilt from the store's px, py, pz every substep and never
+  // written back (the store owns the positions): cloth particles in grid order: x, y, z, (unused).
+  std::vector<kernels::Float4> sorted_;
   std::vector<std::uint32_t> cloth_particles_;  // store indices of the cloth particles
   std::vector<std::uint32_t> count_, slot_partner_;  // per cloth particle: kMaxCandidates slots
   std::vector<float> slot_distance_;

@@ -18,7 +18,7 @@ void DistanceFamily::add_passes(std::vector<Pass>& passes) {
   passes.push_back({"distance", Stage::BeginSubstep, pass_order::kDistanceReset, false,
                     [this](const StepContext&) { solver_->begin_substep(); }});
   passes.push_back({"distance", Stage::Iterate, pass_order::kDistance, true,
-                    [this](const StepContext& c) { solver_->solve(particle_view(store_), c.dt); }});
+                    [this](const StepContext& c) { solver_->solve(*c.packed, c.dt); }, Layout::Packed});
 }
 
 void DistanceFamily::measure(FrameMetrics& m) {

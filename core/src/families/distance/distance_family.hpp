@@ -1,6 +1,7 @@
 // The raw distance constraints of a scene ("distance_constraints", distance_solver.hpp): the
-// XPBD multipliers reset every substep, one colored solve every iteration, the particle indices
-// remapped after a reorder, |C| / rest_length measured at the end of a frame.
+// XPBD multipliers reset every substep, one colored solve every iteration (on the iteration
+// record), the particle indices remapped after a reorder, |C| / rest_length measured at the end
+// of a frame.
 #pragma once
 
 #include <memory>
@@ -22,6 +23,7 @@ class DistanceFamily final : public Family {
 
   void add_passes(std::vector<Pass>& passes) override;
   void remap(std::span<const std::uint32_t> new_index) override { solver_->remap(new_index); }
+  kernels::IndexRange packed_range() const override { return solver_->packed_range(); }
   void measure(FrameMetrics& m) override;
 
  private:

@@ -1,5 +1,6 @@
 // The raw distance constraints of a scene ("distance_constraints"): colored once at build time,
-// solved with XPBD every iteration, their particle indices remapped when the store is reordered.
+// solved with XPBD every iteration on the iteration record (core/src/loop/iteration_record.hpp),
+// their particle indices remapped when the store is reordered.
 #pragma once
 
 #include <span>
@@ -27,9 +28,13 @@ class DistanceSolver {
   std::size_t size() const { return constraints_.size(); }
   std::size_t colors() const { return constraints_.color_start.size() - 1; }
   void begin_substep() { std::fill(constraints_.lambda.begin(), constraints_.lambda.end(), 0.0f); }
-  void solve(const kernels::ParticleView& p, float dt) {
-    kernels::solve_distance_constraints(p, constraints_, dt);
+  /// One iteration on the packed positions (their range covers packed_range()), accumulating
+  /// lambda (reset by begin_substep).
+  void solve(const kernels::PackedPositions& packed, float dt) {
+    kernels::solve_distance_constraints(packed, constraints_, dt, kernels::Multipliers::Accumulate);
   }
+  /// Every store index the constraints use.
+  kernels::IndexRange packed_range() const { return kernels::index_range({constraints_.i, constraints_.j}); }
   void remap(std::span<const std::uint32_t> new_index) {
     for (auto& k : constraints_.i) k = new_index[k];
     for (auto& k : constraints_.j) k = new_index[k];

@@ -60,6 +60,9 @@ class FluidSolver {
   kernels::PbfParams params_;
   float particle_radius_ = 0.0f;
   float viscosity_ = 0.0f, vorticity_ = 0.0f;
+  // Per-pass scratch of the neighbor kernels, rebuilt from the store's columns at every call and
+  // never written back: the store's px, py, pz own the positions (the iteration record is the
+  // colored solves' layout, with the inverse mass in w; these gathers need lambda or volume).
   std::vector<kernels::Float4> pos_;  // (x, y, z, lambda or volume)
   std::vector<kernels::Float4> vel_;  // (vx, vy, vz, volume)
   std::vector<float> omega_norm_;

@@ -3,10 +3,11 @@
 // three SoA columns costs twice as much). Only the index range [lo, hi] the constraints use is
 // packed, as a store may hold much more than the cloths.
 //
-// Who solves several families on the same particles (the cloth: stretch, then bending) keeps one
-// PackedPositions: the range is computed once when the constraints are built (index_range) and
-// again when the store is reordered, the records are allocated once, and the positions are
-// packed once before the first family and unpacked once after the last, not per family.
+// Who solves several families on the same particles keeps one PackedPositions for all of them
+// (the simulation's iteration record, core/src/loop/iteration_record.hpp: raw distance
+// constraints, cloth stretch and bending): the range is computed when the constraints are built
+// (index_range) and again when the store is reordered, the records are allocated once, and the
+// positions are packed once before the first family and unpacked once after the last.
 #pragma once
 
 #include <cstddef>
