@@ -43,7 +43,7 @@ std::vector<KeyTableDoc> scene_key_tables() {
   KeyTableDoc root{"root", key_docs(root_keys())};
   std::vector<KeyTableDoc> tables;
   for (const SceneSection& s : scene_sections()) {
-    root.rows.push_back({"`" + std::string(s.key) + "`", s.is_array ? "array of objects" : "object", "–",
+    root.rows.push_back({code_span(s.key), s.is_array ? "array of objects" : "object", "–",
                          s.is_array ? "`[]`" : "all defaults", "see below", std::string(s.doc)});
     for (KeyTableDoc& t : s.docs()) tables.push_back(std::move(t));
   }
