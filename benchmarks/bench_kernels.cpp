@@ -70,7 +70,6 @@
 #include "seiche/kernels/integrate.hpp"
 #include "seiche/kernels/particle_contacts.hpp"
 #include "seiche/kernels/pbf_density.hpp"
-#include "seiche/kernels/phase.hpp"
 #include "seiche/kernels/tethers.hpp"
 #include "seiche/kernels/vorticity_confinement.hpp"
 #include "seiche/kernels/xsph_viscosity.hpp"
@@ -91,12 +90,12 @@ constexpr float kFriction = 0.3f;
 
 struct Particles {
   std::vector<float> x, y, z, px, py, pz, vx, vy, vz, w;
-  std::vector<std::uint32_t> phase;
+  std::vector<float> radius;  // collision radii
 
   std::size_t size() const { return x.size(); }
   kernels::ParticleView view() {
     return {size(),    x.data(),  y.data(),  z.data(),  px.data(), py.data(),
-            pz.data(), vx.data(), vy.data(), vz.data(), w.data(),  phase.data()};
+            pz.data(), vx.data(), vy.data(), vz.data(), w.data(),  radius.data()};
   }
   void restore_predicted(const Particles& from) { px = from.px, py = from.py, pz = from.pz; }
 };
@@ -122,22 +121,22 @@ Particles make_block(int n, bool cell_order) {
     p.pz[i] = p.z[i] + kDt * p.vz[i];
   }
   p.w.assign(count, 1.0f);
-  p.phase.assign(count, make_phase(Material::Fluid));
+  p.radius.assign(count, 0.0f);
   return p;
 }
 
 Particles make_cell_block(int n) { return make_block(n, true); }
 
 // Appends a cols x rows sheet in the plane y = height, vertex (r, c) at (c, height, r) * spacing,
-// at rest (p = x, v = 0), free, cloth `group`.
-void add_sheet(Particles& p, int cols, int rows, float height, std::uint32_t group) {
+// at rest (p = x, v = 0), free.
+void add_sheet(Particles& p, int cols, int rows, float height) {
   for (int r = 0; r < rows; ++r)
     for (int c = 0; c < cols; ++c) {
       p.x.push_back(c * kSheetSpacing), p.y.push_back(height), p.z.push_back(r * kSheetSpacing);
       p.px.push_back(p.x.back()), p.py.push_back(height), p.pz.push_back(p.z.back());
       p.vx.push_back(0.0f), p.vy.push_back(0.0f), p.vz.push_back(0.0f);
       p.w.push_back(1.0f);
-      p.phase.push_back(make_phase(Material::Cloth, group));
+      p.radius.push_back(0.0f);
     }
 }
 
@@ -178,7 +177,7 @@ CollisionScene make_collision_scene(int n) {
   for (int a = 0; a < 3; ++a)
     s.params.domain_min[a] = 0.5f * kSpacing, s.params.domain_max[a] = L - 0.5f * kSpacing;
   s.params.domain_friction = kFriction;
-  s.params.fluid_radius = 0.5f * kSpacing;
+  s.particles.radius.assign(s.particles.size(), 0.5f * kSpacing);  // a fluid's particle radius
   // A torus around the y axis through (0.7, 0.6, 0.5) L: major radius 0.25 L, minor 0.1 L.
   constexpr int kVoxels = 64;
   s.sdf.voxel = L / (kVoxels - 1);
@@ -277,7 +276,7 @@ TetherSheet make_tether_sheet(int n) {
   constexpr std::size_t kPerVertex = 4;  // cloth_solver.cpp's kTethersPerVertex
   TetherSheet s;
   Particles& p = s.particles;
-  add_sheet(p, n, n, 0.0f, 0);
+  add_sheet(p, n, n, 0.0f);
   std::fill_n(p.w.begin(), n, 0.0f);  // row 0: pinned vertices 0 .. n-1
   kernels::Tethers& t = s.tethers;
   t.start.push_back(0);
@@ -325,8 +324,8 @@ ContactSheets make_contact_sheets(int n) {
   ContactSheets s;
   Particles& p = s.particles;
   const int cols = n, rows = n / 2;
-  add_sheet(p, cols, rows, 0.0f, 0);
-  add_sheet(p, cols, rows, 0.7f * kContact, 1);
+  add_sheet(p, cols, rows, 0.0f);
+  add_sheet(p, cols, rows, 0.7f * kContact);
   std::mt19937 rng(42);
   std::uniform_real_distribution<float> jitter(-0.15f * kContact, 0.15f * kContact);
   std::uniform_real_distribution<float> motion(-0.05f * kContact, 0.05f * kContact);

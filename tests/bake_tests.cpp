@@ -43,6 +43,15 @@ SceneDef mixed_scene(const std::vector<std::string>& overrides = {}) {
   return load_scene_text(kScene, "mixed.json", overrides);
 }
 
+// A sheet hanging from two pinned corners: the stretch forests carry their multipliers from one
+// substep to the next (the cloth family's checkpoint chunk).
+const char* const kClothScene = R"({
+  "name": "hanging",
+  "solver": { "substeps": 4, "iterations": 4 },
+  "domain": { "min": [0, 0, 0], "max": [1, 1, 1] },
+  "cloths": [ { "sheet": { "origin": [0.2, 0.8, 0.2], "size": [0.5, 0.5], "resolution": [12, 12] },
+                "pins": [0, 11] } ] })";
+
 BakeRecipe mixed_recipe(int first, int last, const std::vector<std::string>& overrides = {}) {
   return make_bake_recipe("mixed", "mixed.json", kScene, overrides, first, last);
 }
@@ -128,6 +137,81 @@ BakeOptions quiet_options(const fs::path& dir, std::vector<FrameExporter*> expor
   o.exporters = std::move(exporters);
   return o;
 }
+
+// A checkpoint file taken apart along its layout (checkpoint.hpp), to be changed in one place
+// and sealed again (body size and checksum), so that only the reader's checks of that place
+// stand between it and a restore.
+struct CheckpointParts {
+  struct Column {
+    std::string name;
+    std::uint8_t type;
+    std::string values;
+  };
+  std::string head;  // version, fingerprint, frame, time, particle count
+  std::uint64_t n = 0;
+  std::vector<Column> columns;
+  std::vector<std::pair<std::string, std::string>> chunks;
+
+  static constexpr std::size_t kPreamble = 8 + 4 + 8 + 8;
+  explicit CheckpointParts(const std::string& file) {
+    const std::string body = file.substr(kPreamble);
+    std::size_t at = 0;
+    auto take = [&](std::size_t size) {
+      std::string bytes = body.substr(at, size);
+      at += size;
+      return bytes;
+    };
+    auto number = [&](auto value) {
+      std::memcpy(&value, body.data() + at, sizeof(value));
+      at += sizeof(value);
+      return value;
+    };
+    auto text = [&] { return take(number(std::uint32_t())); };
+    text();
+    at += 8 + 4 + 8;
+    n = number(std::uint64_t());
+    head = body.substr(0, at);
+    for (std::uint32_t k = number(std::uint32_t()); k > 0; --k) {
+      std::string name = text();
+      const auto type = number(std::uint8_t());
+      columns.push_back({name, type, take(n * 4)});
+    }
+    for (std::uint32_t k = number(std::uint32_t()); k > 0; --k) {
+      std::string name = text();
+      chunks.emplace_back(name, take(number(std::uint64_t())));
+    }
+  }
+  template <class T>
+  static void put(std::string& out, T value) {
+    out.append(reinterpret_cast<const char*>(&value), sizeof(T));
+  }
+  std::string body() const {
+    std::string b = head;
+    put(b, std::uint32_t(columns.size()));
+    for (const Column& c : columns) {
+      put(b, std::uint32_t(c.name.size()));
+      b += c.name;
+      put(b, c.type);
+      b += c.values;
+    }
+    put(b, std::uint32_t(chunks.size()));
+    for (const auto& [name, bytes] : chunks) {
+      put(b, std::uint32_t(name.size()));
+      b += name;
+      put(b, std::uint64_t(bytes.size()));
+      b += bytes;
+    }
+    return b;
+  }
+  /// A checkpoint file of `body` in format `format`.
+  static std::string seal(const std::string& body, std::uint32_t format = 3) {
+    std::string file = "SEICHECP";
+    put(file, format);
+    put(file, std::uint64_t(body.size()));
+    put(file, fnv1a64(body));
+    return file + body;
+  }
+};
 
 }  // namespace
 
@@ -218,6 +302,101 @@ TEST(Checkpoint, DamagedFilesAreRefusedNamingTheFile) {
   } catch (const ResumeError& e) {
     EXPECT_NE(std::string(e.what()).find(file.string()), std::string::npos) << e.what();
   }
+}
+
+TEST(Checkpoint, ClothStretchMultipliersAreTheClothFamilysChunk) {
+  const SceneDef scene = load_scene_text(kClothScene, "hanging.json");
+  const fs::path file = fresh_dir("cloth_chunk") / "checkpoint.bin";
+  Simulation straight(scene);
+  for (int f = 0; f < 3; ++f) straight.step_frame();
+  write_file_atomically(file, encode_checkpoint(straight, 42));
+  for (int f = 0; f < 3; ++f) straight.step_frame();
+
+  const Checkpoint cp = read_checkpoint(file);
+  ASSERT_EQ(cp.chunks.all().size(), 1u);
+  const CheckpointChunks::Chunk& chunk = cp.chunks.all()[0];
+  EXPECT_EQ(chunk.name, "cloth.stretch_multipliers");
+  ASSERT_GT(chunk.bytes.size(), 0u);
+  EXPECT_EQ(chunk.bytes.size() % 4, 0u);
+  Simulation resumed(scene);
+  restore_checkpoint(resumed, cp, 42, file);
+  for (int f = 0; f < 3; ++f) resumed.step_frame();
+  expect_same_state(resumed.particles(), straight.particles(), "cloth after stepping on");
+
+  // The chunk matters: zeroed multipliers continue to other bits.
+  Checkpoint zeroed = cp;
+  zeroed.chunks = {};
+  zeroed.chunks.put(chunk.name, std::string(chunk.bytes.size(), '\0'));
+  Simulation forgetful(scene);
+  restore_checkpoint(forgetful, zeroed, 42, file);
+  for (int f = 0; f < 3; ++f) forgetful.step_frame();
+  EXPECT_NE(std::memcmp(forgetful.particles().y.data(), straight.particles().y.data(),
+                        straight.particles().size() * 4),
+            0);
+}
+
+TEST(Checkpoint, ColumnsAndChunksAreReadByNameAndCheckedAgainstTheScene) {
+  const SceneDef scene = load_scene_text(kClothScene, "hanging.json");
+  Simulation sim(scene);
+  sim.step_frame();
+  const std::string good = encode_checkpoint(sim, 42);
+  const fs::path file = fresh_dir("by_name") / "checkpoint.bin";
+  // What reading and restoring `bytes` into a fresh simulation of the scene says.
+  auto refusal = [&](const std::string& bytes) -> std::string {
+    write_bytes(file, bytes);
+    try {
+      Simulation fresh(scene);
+      restore_checkpoint(fresh, read_checkpoint(file), 42, file);
+    } catch (const ResumeError& e) {
+      return e.what();
+    }
+    return "(accepted)";
+  };
+  auto expect_refused = [&](const std::string& bytes, const std::string& why, const char* label) {
+    const std::string message = refusal(bytes);
+    EXPECT_NE(message.find(file.string()), std::string::npos) << label << ": " << message;
+    EXPECT_NE(message.find(why), std::string::npos) << label << ": expected '" << why << "' in: " << message;
+  };
+  const CheckpointParts parts(good);
+  ASSERT_EQ(parts.columns.size(), 12u);
+  ASSERT_EQ(parts.chunks.size(), 1u);
+  EXPECT_EQ(refusal(CheckpointParts::seal(parts.body())), "(accepted)");  // the parts are the file
+
+  CheckpointParts unknown_chunk = parts;
+  unknown_chunk.chunks.emplace_back("shape.rest_rotations", std::string(16, '\1'));
+  expect_refused(CheckpointParts::seal(unknown_chunk.body()),
+                 "holds chunk 'shape.rest_rotations' that this seiche does not know", "unknown chunk");
+  CheckpointParts unknown_column = parts;
+  unknown_column.columns.push_back({"rod.twist", 0, std::string(parts.n * 4, '\0')});
+  expect_refused(CheckpointParts::seal(unknown_column.body()),
+                 "holds column 'rod.twist' that this seiche does not know", "unknown column");
+  CheckpointParts not_state = parts;
+  not_state.columns.push_back({"density", 0, std::string(parts.n * 4, '\0')});
+  expect_refused(CheckpointParts::seal(not_state.body()), "column 'density'", "scratch column");
+
+  CheckpointParts missing_column = parts;
+  missing_column.columns.erase(missing_column.columns.begin() + 9);
+  ASSERT_EQ(parts.columns[9].name, "w");
+  expect_refused(CheckpointParts::seal(missing_column.body()), "no column 'w'", "missing column");
+  CheckpointParts missing_chunk = parts;
+  missing_chunk.chunks.clear();
+  expect_refused(CheckpointParts::seal(missing_chunk.body()), "no chunk 'cloth.stretch_multipliers'",
+                 "missing chunk");
+
+  CheckpointParts short_chunk = parts;  // consistent, but one multiplier short
+  short_chunk.chunks[0].second.resize(short_chunk.chunks[0].second.size() - 4);
+  expect_refused(CheckpointParts::seal(short_chunk.body()), "chunk 'cloth.stretch_multipliers' holds",
+                 "short chunk");
+  std::string truncated = parts.body();  // the chunk's announced size runs past the end
+  truncated.resize(truncated.size() - 4);
+  expect_refused(CheckpointParts::seal(truncated), "ends inside chunk 'cloth.stretch_multipliers'",
+                 "truncated chunk");
+  CheckpointParts phase_as_float = parts;  // phase written as f32
+  phase_as_float.columns[10].type = 0;
+  ASSERT_EQ(parts.columns[10].name, "phase");
+  expect_refused(CheckpointParts::seal(phase_as_float.body()), "column 'phase' is f32", "retyped column");
+  expect_refused(CheckpointParts::seal(parts.body(), 2), "format version 2, this seiche reads version 3",
+                 "format 2");
 }
 
 TEST(Checkpoint, CheckpointOfAnotherSceneIsRefused) {

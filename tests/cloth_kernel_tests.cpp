@@ -22,7 +22,6 @@
 #include "seiche/kernels/hinges.hpp"
 #include "seiche/kernels/isometric_bending.hpp"
 #include "seiche/kernels/particle_contacts.hpp"
-#include "seiche/kernels/phase.hpp"
 #include "seiche/kernels/sdf_grid.hpp"
 #include "seiche/kernels/tethers.hpp"
 
@@ -36,8 +35,8 @@ constexpr double kPi = std::numbers::pi;
 // SoA particles, as the kernels see them.
 struct Particles {
   std::vector<float> x, y, z, px, py, pz, vx, vy, vz, w;
-  std::vector<std::uint32_t> phase;
-  explicit Particles(std::size_t n, Material m = Material::Free)
+  std::vector<float> radius;  // collision radii
+  explicit Particles(std::size_t n, float r = 0.0f)
       : x(n),
         y(n),
         z(n),
@@ -48,7 +47,7 @@ struct Particles {
         vy(n),
         vz(n),
         w(n, 1.0f),
-        phase(n, make_phase(m)) {}
+        radius(n, r) {}
   std::size_t size() const { return x.size(); }
   void set(std::size_t i, double a, double b, double c) {
     x[i] = px[i] = float(a);
@@ -58,7 +57,7 @@ struct Particles {
   std::array<double, 3> predicted(std::size_t i) const { return {px[i], py[i], pz[i]}; }
   ParticleView view() {
     return {x.size(),  x.data(),  y.data(),  z.data(),  px.data(), py.data(),
-            pz.data(), vx.data(), vy.data(), vz.data(), w.data(),  phase.data()};
+            pz.data(), vx.data(), vy.data(), vz.data(), w.data(),  radius.data()};
   }
   /// Positions at substep start become the predicted positions (for error metrics on x).
   void commit() { x = px, y = py, z = pz; }
@@ -131,7 +130,7 @@ Sheet make_sheet(int n, double spacing) {
 }
 
 Particles particles_of(const Sheet& s) {
-  Particles p(s.x.size(), Material::Cloth);
+  Particles p(s.x.size());
   for (std::size_t i = 0; i < s.x.size(); ++i) p.set(i, s.x[i], s.y[i], s.z[i]);
   return p;
 }
@@ -844,7 +843,7 @@ TEST(ParticleContacts, ThreadCountDoesNotChangeResults) {
   // A random cloud of 3000 particles with many overlaps, friction on, three iterations.
   std::mt19937 rng(9);
   std::uniform_real_distribution<float> u(0.0f, 1.0f);
-  Particles init(3000, Material::Cloth);
+  Particles init(3000);
   for (std::size_t i = 0; i < init.size(); ++i) {
     init.set(i, u(rng), u(rng), u(rng));
     init.px[i] += 0.01f * (u(rng) - 0.5f);  // some motion within the substep
@@ -938,10 +937,8 @@ TEST(SdfGrid, TrilinearSampleAndGradient) {
 }
 
 TEST(ClothCollisions, CapsulePushesOutToItsSurfacePlusTheParticleRadius) {
-  Particles p(4, Material::Cloth);
-  p.phase[1] = make_phase(Material::Cloth, 1);
-  p.phase[2] = make_phase(Material::Fluid);
-  p.phase[3] = make_phase(Material::Free);
+  Particles p(4);
+  p.radius = {0.01f, 0.02f, 0.03f, 0.0f};  // two cloths' vertices, a fluid particle, a raw one
   p.set(0, 0.5, 0.55, 0.5);   // over the middle of the axis, cloth 0 (radius 0.01)
   p.set(1, 0.1, 0.5, 0.52);   // beyond end a: the end cap, cloth 1 (radius 0.02)
   p.set(2, 0.55, 0.45, 0.5);  // fluid (radius 0.03)
@@ -951,10 +948,7 @@ TEST(ClothCollisions, CapsulePushesOutToItsSurfacePlusTheParticleRadius) {
   capsule.a[0] = 0.3f, capsule.a[1] = 0.5f, capsule.a[2] = 0.5f;
   capsule.b[0] = 0.7f, capsule.b[1] = 0.5f, capsule.b[2] = 0.5f;
   capsule.radius = 0.2f;
-  const float cloth_radius[2] = {0.01f, 0.02f};
   CollisionParams params;
-  params.fluid_radius = 0.03f;
-  params.cloth_radius = cloth_radius;
   solve_collisions(p.view(), params, std::span<const CollisionShape>(&capsule, 1));
   auto axis_distance = [&](int i) {
     const double t = std::clamp((double(p.px[i]) - 0.3) / 0.4, 0.0, 1.0);
@@ -970,7 +964,7 @@ TEST(ClothCollisions, CapsulePushesOutToItsSurfacePlusTheParticleRadius) {
   EXPECT_NEAR(p.py[3], 0.7f, 1e-6f);
 
   // A zero-length capsule is a sphere; a particle outside is untouched.
-  Particles q(2, Material::Cloth);
+  Particles q(2, 0.01f);
   q.set(0, 0.5, 0.6, 0.5), q.set(1, 0.5, 0.9, 0.5);
   capsule.b[0] = capsule.a[0] = 0.5f;
   solve_collisions(q.view(), params, std::span<const CollisionShape>(&capsule, 1));
@@ -984,12 +978,10 @@ TEST(ClothCollisions, SdfPushesOutAlongTheFieldsNormal) {
   CollisionShape shape;
   shape.kind = CollisionShape::Kind::Sdf;
   shape.sdf = &sphere.grid;
-  const float cloth_radius[1] = {0.01f};
   CollisionParams params;
-  params.cloth_radius = cloth_radius;
   // Particle 0 starts 2 cm deep (a step's worth of penetration), along dir from the center.
   const double dir[3] = {0.05, 0.05, 0.02}, len = std::hypot(dir[0], dir[1], dir[2]);
-  Particles p(3, Material::Cloth);
+  Particles p(3, 0.01f);  // a cloth's vertices: half its thickness
   p.set(0, center[0] + 0.18 * dir[0] / len, center[1] + 0.18 * dir[1] / len,
         center[2] + 0.18 * dir[2] / len);
   p.set(1, 0.5, 0.605, 0.5);  // outside the sphere but within the cloth radius
@@ -1305,7 +1297,7 @@ using test::Positions;
 // A chain pin 0 - 1 - 2 as one tree of the forest: edge k joins particle k + 1 to its parent k,
 // rest length 1, multipliers 0. The positions given are the predicted ones (what the solve moves).
 struct Chain {
-  Particles p{3, Material::Cloth};
+  Particles p{3};
   DistanceConstraints c;
   DistanceForest forest;
   Chain(const Positions& x, float w1, float w2, float compliance) {

@@ -7,6 +7,10 @@
 #include <fstream>
 #include <numeric>
 #include <sstream>
+#include <stdexcept>
+#include <string>
+#include <variant>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -87,6 +91,55 @@ TEST(ParticleStore, ReorderMovesEveryStateColumnByOnePermutation) {
   for (std::uint32_t k = 0; k < 5; ++k) EXPECT_EQ(inv[order[k]], k);
 }
 
+TEST(ParticleStore, TableDeclaresEveryColumnOnceWithItsKind) {
+  ParticleStore s;
+  std::vector<std::string> state, constant, scratch;
+  for (const StoreColumn& c : s.columns())
+    (c.kind == ColumnKind::State ? state : c.kind == ColumnKind::Constant ? constant : scratch).push_back(c.name);
+  EXPECT_EQ(state, (std::vector<std::string>{"x", "y", "z", "px", "py", "pz", "vx", "vy", "vz", "w", "phase", "id"}));
+  EXPECT_EQ(constant, std::vector<std::string>{"radius"});
+  EXPECT_EQ(scratch, (std::vector<std::string>{"density", "lambda", "omega_x", "omega_y", "omega_z"}));
+  ASSERT_NE(s.find("phase"), nullptr);
+  EXPECT_EQ(s.find("phase")->type(), ColumnType::U32);
+  EXPECT_EQ(s.find("id")->type(), ColumnType::I32);
+  EXPECT_EQ(s.find("nothing"), nullptr);
+}
+
+TEST(ParticleStore, FamilyColumnsResizeReorderAndCopyWithTheTable) {
+  ParticleStore s;
+  s.resize(3);
+  FloatColumn& rest = s.add_column<float>("shape.rest_x", ColumnKind::Constant);
+  AlignedColumn<std::int32_t>& frame = s.add_column<std::int32_t>("rod.frame", ColumnKind::State);
+  FloatColumn& work = s.add_column<float>("shape.work", ColumnKind::Scratch);
+  EXPECT_THROW(s.add_column<float>("x", ColumnKind::State), std::invalid_argument);
+  EXPECT_EQ(rest.size(), 3u);
+  s.resize(5);
+  EXPECT_EQ(rest.size(), 5u);
+  EXPECT_EQ(frame.size(), 5u);
+  EXPECT_EQ(work.size(), 5u);
+  for (int i = 0; i < 5; ++i) s.x[i] = float(i), rest[i] = 10.0f * i, frame[i] = 100 * i, work[i] = float(-i);
+  const std::vector<std::uint32_t> order = {3, 0, 4, 1, 2};
+  s.reorder(order);
+  for (int k = 0; k < 5; ++k) {
+    EXPECT_EQ(s.x[k], float(order[k]));
+    EXPECT_EQ(rest[k], 10.0f * order[k]);   // Constant: moves with its particle
+    EXPECT_EQ(frame[k], 100 * int(order[k]));  // State: too
+    EXPECT_EQ(work[k], float(-k));          // Scratch: left alone
+  }
+  // A copy carries the whole table, its named members on its own columns.
+  ParticleStore copy = s;
+  copy.x[0] = -1.0f;
+  EXPECT_EQ(s.x[0], float(order[0]));
+  ASSERT_NE(copy.find("shape.rest_x"), nullptr);
+  EXPECT_EQ(std::get<FloatColumn>(copy.find("shape.rest_x")->data)[2], 10.0f * order[2]);
+  ParticleStore assigned;
+  assigned = copy;
+  EXPECT_EQ(assigned.x[0], -1.0f);
+  EXPECT_EQ(assigned.size(), 5u);
+  EXPECT_NE(assigned.x.data(), copy.x.data());
+  EXPECT_GT(s.bytes(), ParticleStore().bytes());
+}
+
 // ---- Scenes through the simulation ---------------------------------------------------------------
 
 TEST(IterationRecord, PacksOrUnpacksOnlyWhenTheOtherLayoutWasWrittenLast) {
@@ -133,6 +186,24 @@ TEST(Simulation, SeedWorkedExampleAfterOneFrame) {
   EXPECT_NEAR(s.y[1], 25.0 / 6, 1e-5);
   EXPECT_NEAR(s.z[1], 13.0 / 3, 1e-5);
   EXPECT_EQ(sim.pipeline(), (std::vector<std::string>{"predict", "distance", "collisions", "update"}));
+}
+
+TEST(Simulation, FamiliesWriteTheirParticlesCollisionRadius) {
+  // One raw particle, a fluid block of spacing 0.04, two cloths 6 mm and 20 mm thick.
+  const Simulation sim(load_scene_text(R"({
+    "domain": { "min": [0, 0, 0], "max": [1, 1, 1] },
+    "particles": [ { "x": [0.9, 0.9, 0.9] } ],
+    "fluids": [ { "box": { "min": [0, 0, 0], "max": [0.2, 0.2, 0.2] }, "spacing": 0.04 } ],
+    "cloths": [ { "sheet": { "origin": [0.3, 0.5, 0.3], "size": [0.2, 0.2], "resolution": [3, 3] }, "thickness": 0.006 },
+                { "sheet": { "origin": [0.3, 0.8, 0.3], "size": [0.2, 0.2], "resolution": [4, 4] }, "thickness": 0.02 } ] })",
+                                       "radii.json"));
+  const ParticleStore& s = sim.particles();
+  ASSERT_EQ(s.size(), 1u + 125u + 9u + 16u);
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    const int id = s.id[i];
+    const float expected = id == 0 ? 0.0f : id <= 125 ? 0.02f : id <= 134 ? 0.003f : 0.01f;
+    EXPECT_EQ(s.radius[i], expected) << "particle " << id;
+  }
 }
 
 TEST(Simulation, ComplianceIsInPhysicalUnits) {

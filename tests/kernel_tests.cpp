@@ -16,7 +16,6 @@
 #include "seiche/kernels/integrate.hpp"
 #include "seiche/kernels/pbf_density.hpp"
 #include "seiche/kernels/pbf_walls.hpp"
-#include "seiche/kernels/phase.hpp"
 #include "seiche/kernels/sph_kernels.hpp"
 #include "seiche/kernels/vorticity_confinement.hpp"
 #include "seiche/kernels/xsph_viscosity.hpp"
@@ -29,10 +28,9 @@ namespace {
 // SoA particles for kernel tests.
 struct Particles {
   std::vector<float> x, y, z, px, py, pz, vx, vy, vz, w;
-  std::vector<std::uint32_t> phase;
-  explicit Particles(std::size_t n, Material m = Material::Free)
-      : x(n), y(n), z(n), px(n), py(n), pz(n), vx(n), vy(n), vz(n), w(n, 1.0f),
-        phase(n, make_phase(m)) {}
+  std::vector<float> radius;  // collision radii
+  explicit Particles(std::size_t n, float r = 0.0f)
+      : x(n), y(n), z(n), px(n), py(n), pz(n), vx(n), vy(n), vz(n), w(n, 1.0f), radius(n, r) {}
   void set(std::size_t i, float a, float b, float c) {
     x[i] = px[i] = a;
     y[i] = py[i] = b;
@@ -40,7 +38,7 @@ struct Particles {
   }
   ParticleView view() {
     return {x.size(), x.data(), y.data(), z.data(), px.data(), py.data(), pz.data(),
-            vx.data(), vy.data(), vz.data(), w.data(), phase.data()};
+            vx.data(), vy.data(), vz.data(), w.data(), radius.data()};
   }
 };
 
@@ -503,7 +501,7 @@ TEST(Vorticity, RigidRotationHasVorticityTwiceTheAngularVelocity) {
 // ---- Collisions -------------------------------------------------------------------------------------
 
 TEST(Collisions, ShapesPushParticlesOutAndDomainHoldsThem) {
-  Particles p(4, Material::Free);
+  Particles p(4);
   p.set(0, 0.5f, -0.1f, 0.5f);      // below the floor plane y = 0
   p.set(1, 0.52f, 0.5f, 0.5f);      // inside the sphere at (0.5, 0.5, 0.5), r = 0.1
   p.set(2, 0.81f, 0.85f, 0.85f);    // inside the box [0.8, 0.9]^3 (closest face x = 0.8)
@@ -590,32 +588,22 @@ void collide_domain(Point& p, const Point& x, const CollisionParams& c, float r)
     }
   }
 }
-float radius(std::uint32_t phase, const CollisionParams& c) {
-  switch (phase_material(phase)) {
-    case Material::Fluid: return c.fluid_radius;
-    case Material::Cloth: return c.cloth_radius[phase >> 8];
-    default: return 0.0f;
-  }
-}
-
 }  // namespace domain_reference
 
 TEST(Collisions, DomainPassMatchesTheScalarReferenceBitForBit) {
   const std::size_t n = 9003;  // three tasks of the kernel's parallel loop, a partial last batch
   std::mt19937 rng(23);
   std::uniform_real_distribution<float> pos(-0.3f, 1.3f), move(-0.4f, 0.4f), unit(0.0f, 1.0f);
-  std::uniform_int_distribution<int> run_length(1, 20), material(0, 3);
-  const float cloth_radius[2] = {0.02f, 0.6f};  // the second wider than half the domain
+  std::uniform_int_distribution<int> run_length(1, 20), kind(0, 3);
+  // Raw particles, fluid, two cloths: the last wider than half the domain.
+  const float radii[4] = {0.0f, 0.05f, 0.02f, 0.6f};
   Particles p(n);
-  for (std::size_t i = 0; i < n;) {  // runs of one phase, so batches are uniform or mixed
-    const int m = material(rng);
-    const std::uint32_t phase = m == 0   ? make_phase(Material::Free)
-                                : m == 1 ? make_phase(Material::Fluid)
-                                         : make_phase(Material::Cloth, std::uint32_t(m - 2));
+  for (std::size_t i = 0; i < n;) {  // runs of one radius, so batches are uniform or mixed
+    const float r = radii[kind(rng)];
     for (int k = run_length(rng); k > 0 && i < n; --k, ++i) {
       p.set(i, pos(rng), pos(rng), pos(rng));
       p.px[i] += move(rng), p.py[i] += move(rng), p.pz[i] += move(rng);
-      p.phase[i] = phase;
+      p.radius[i] = r;
       p.w[i] = unit(rng) < 0.05f ? 0.0f : 1.0f;
     }
   }
@@ -624,14 +612,12 @@ TEST(Collisions, DomainPassMatchesTheScalarReferenceBitForBit) {
   for (float mu : {0.0f, 0.4f}) {
     CollisionParams params;
     params.domain_friction = mu;
-    params.fluid_radius = 0.05f;
-    params.cloth_radius = cloth_radius;
     Particles expected = p, got = p;
     for (std::size_t i = 0; i < n; ++i) {
       if (expected.w[i] <= 0.0f) continue;
       domain_reference::Point q{expected.px[i], expected.py[i], expected.pz[i]};
       domain_reference::collide_domain(q, {expected.x[i], expected.y[i], expected.z[i]}, params,
-                                       domain_reference::radius(expected.phase[i], params));
+                                       expected.radius[i]);
       expected.px[i] = q.x, expected.py[i] = q.y, expected.pz[i] = q.z;
     }
     solve_collisions(got.view(), params, {});

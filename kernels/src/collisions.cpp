@@ -2,9 +2,10 @@
 // collider of the scene, then the domain box (last: the domain always wins).
 //
 // Colliders (plane, box, sphere, capsule, SDF) run per particle in scalar code, and only when
-// the scene has colliders. The domain runs lane = particle over kLanes consecutive particles:
-// for each axis a in turn, the wall a particle is past (p_a < lo_a, or p_a > hi_a, with lo and
-// hi the domain shrunk by the particle's radius) has normal n = +-e_a and depth d; then
+// the scene has colliders. The domain runs lane = particle over kLanes consecutive particles
+// (their radii one load from the radius column): for each axis a in turn, the wall a particle
+// is past (p_a < lo_a, or p_a > hi_a, with lo and hi the domain shrunk by the particle's
+// radius) has normal n = +-e_a and depth d; then
 //   p += d n,  friction on dx = p - x (as in collisions.hpp),  p_a = lo_a (hi_a) exactly.
 // Every branch of the scalar formulas is a select here and the arithmetic is the same operations
 // in the same order, so each particle gets the bits a scalar loop gives (kernel_tests.cpp checks
@@ -16,7 +17,6 @@
 #include <algorithm>
 #include <cmath>
 
-#include "seiche/kernels/phase.hpp"
 #include "simd.hpp"
 
 namespace seiche::kernels {
@@ -116,23 +116,11 @@ inline void collide_shape(Point& p, const Point& x, const CollisionShape& s, flo
   }
 }
 
-// A particle's collision radius: fluid_radius for fluid, its cloth's half thickness for cloth.
-inline float particle_radius(std::uint32_t phase, const CollisionParams& c) {
-  switch (phase_material(phase)) {
-    case Material::Fluid:
-      return c.fluid_radius;
-    case Material::Cloth:
-      return c.cloth_radius != nullptr ? c.cloth_radius[phase >> 8] : 0.0f;
-    default:
-      return 0.0f;
-  }
-}
-
-void collide_shapes(const ParticleView& p, const CollisionParams& params,
-                    std::span<const CollisionShape> shapes, std::size_t begin, std::size_t end) {
+void collide_shapes(const ParticleView& p, std::span<const CollisionShape> shapes, std::size_t begin,
+                    std::size_t end) {
   for (std::size_t i = begin; i != end; ++i) {
     if (p.w[i] <= 0.0f) continue;
-    const float r = particle_radius(p.phase[i], params);
+    const float r = p.radius[i];
     Point q{p.px[i], p.py[i], p.pz[i]};
     const Point x{p.x[i], p.y[i], p.z[i]};
     for (const CollisionShape& s : shapes) collide_shape(q, x, s, r);
@@ -141,19 +129,6 @@ void collide_shapes(const ParticleView& p, const CollisionParams& params,
 }
 
 // ---- The domain: lane = particle ----------------------------------------------------------------
-
-// particle_radius per lane: one compare when the lanes share a phase (materials and cloths are
-// stored in blocks), else lane by lane.
-Floats lane_radii(const Lanes& lanes, const std::uint32_t* phase, const CollisionParams& c) {
-  using seiche::simd::Ints;
-  const std::uint32_t first = phase[lanes.i];
-  if (lanes.full() && xsimd::all(Ints::load_unaligned(phase + lanes.i) == Ints(first)))
-    return Floats(particle_radius(first, c));
-  alignas(64) float t[kLanes];
-  for (std::size_t l = 0; l < kLanes; ++l)
-    t[l] = particle_radius(phase[lanes.i + std::min(l, lanes.active - 1)], c);
-  return Floats::load_aligned(t);
-}
 
 // The walls of axis a for every lane where `movable`: resolve_contact with n = +-e_a, as selects.
 SEICHE_INLINE inline void domain_axis(Floats p[3], const Floats x[3], int a, const Floats& lo,
@@ -187,7 +162,7 @@ SEICHE_INLINE inline void collide_domain(const ParticleView& v, const CollisionP
   Floats p[3] = {lanes.load(v.px), lanes.load(v.py), lanes.load(v.pz)};
   const Floats x[3] = {lanes.load(v.x), lanes.load(v.y), lanes.load(v.z)};
   const Mask movable = !(lanes.load(v.w) <= Floats(0.0f));  // as the scalar `w <= 0: skip`
-  const Floats r = lane_radii(lanes, v.phase, c);
+  const Floats r = lanes.load(v.radius);
   for (int a = 0; a < 3; ++a) {
     const Floats lo = Floats(c.domain_min[a]) + r;
     const Floats shrunk = Floats(c.domain_max[a]) - r;
@@ -205,7 +180,7 @@ void solve_collisions(const ParticleView& p, const CollisionParams& params,
   tbb::parallel_for(
       tbb::blocked_range<std::size_t>(0, batches, kBatchesPerTask), [&](const auto& r) {
         const std::size_t begin = r.begin() * kLanes, end = std::min(p.n, r.end() * kLanes);
-        if (!shapes.empty()) collide_shapes(p, params, shapes, begin, end);
+        if (!shapes.empty()) collide_shapes(p, shapes, begin, end);
         for (std::size_t i = begin; i < end; i += kLanes)
           collide_domain(p, params, Lanes{i, std::min(kLanes, end - i)});
       });

@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "seiche/checkpoint_chunks.hpp"
 #include "seiche/frame_metrics.hpp"
 #include "seiche/particle_store.hpp"
 #include "seiche/pass_timer.hpp"
@@ -91,16 +92,18 @@ class Simulation {
   /// Names of the passes this scene's pipeline runs, in order.
   std::vector<std::string> pipeline() const;
 
-  /// Continues from a saved state (a checkpoint, checkpoint.hpp): `saved` holds every state
-  /// column in the saved order, its ids a permutation of this store's ids; `frames_done` the
-  /// frames it had stepped. Reorders this store into the saved order (remapping every index held
-  /// elsewhere, as the neighbor stage does), then overwrites the state columns and the frame
-  /// count, so that stepping on is bit-identical to never having stopped.
+  /// Continues from a saved state (a checkpoint, checkpoint.hpp): `saved` holds every State
+  /// column of this store (by name) in the saved order, its ids a permutation of this store's
+  /// ids; `frames_done` the frames it had stepped. Reorders this store into the saved order
+  /// (remapping every index held elsewhere, as the neighbor stage does), then overwrites the
+  /// State columns and the frame count; with restore_family_state, stepping on is bit-identical
+  /// to never having stopped.
   void restore_state(const ParticleStore& saved, int frames_done);
-  /// The cloth stretch multipliers of the last substep, which the stretch forests read in the
-  /// next one (empty without forests), and their restoring from a checkpoint (same size).
-  std::span<const float> cloth_stretch_multipliers() const;
-  void restore_cloth_stretch_multipliers(std::span<const float> saved);
+  /// The state every family carries from one substep to the next (Family::save_state), as the
+  /// checkpoint's named chunks, and its restoring (after restore_state; throws ResumeError when a
+  /// chunk is missing or of the wrong size).
+  CheckpointChunks family_state() const;
+  void restore_family_state(const CheckpointChunks& chunks);
 
  private:
   void create_families();

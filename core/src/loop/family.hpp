@@ -10,7 +10,8 @@
 // iteration_record.hpp); the loop packs or unpacks between passes, never a family.
 // After the store is reordered, every family remaps the particle indices it holds; after the
 // fixed iterations, families may vote for more (the fluid's density tolerance); at the end of a
-// frame, each measures the error of its constraints.
+// frame, each measures the error of its constraints; a checkpoint saves and restores the state it
+// carries across substeps.
 #pragma once
 
 #include <cstdint>
@@ -19,6 +20,7 @@
 #include <vector>
 
 #include "iteration_record.hpp"
+#include "seiche/checkpoint_chunks.hpp"
 #include "seiche/frame_metrics.hpp"
 #include "seiche/kernels/packed_positions.hpp"
 #include "seiche/simulation.hpp"
@@ -85,6 +87,12 @@ class Family {
   /// Its part of the frame's metrics: its constraints' error on the store's final positions.
   /// Only reads the store.
   virtual void measure(FrameMetrics& m) { (void)m; }
+  /// The state it carries from one substep to the next beyond the store's State columns, for
+  /// checkpoints: saved as named chunks ("<family>.<what>", checkpoint_chunks.hpp) and restored
+  /// into a family built from the same scene, after the store (restore checks the sizes and
+  /// throws ResumeError). Nothing by default.
+  virtual void save_state(CheckpointChunks& chunks) const { (void)chunks; }
+  virtual void restore_state(const CheckpointChunks& chunks) { (void)chunks; }
 };
 
 }  // namespace seiche

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <stdexcept>
 
 #include "store/blocked_reduce.hpp"
@@ -43,6 +44,7 @@ void Simulation::create_families() {
     store_.vx[k] = p.v[0], store_.vy[k] = p.v[1], store_.vz[k] = p.v[2];
     store_.w[k] = p.mass > 0.0f ? 1.0f / p.mass : 0.0f;
     store_.phase[k] = make_phase(Material::Free);
+    store_.radius[k] = 0.0f;
   }
   if (!scene_.fluids.empty()) {
     auto fluid = std::make_unique<FluidFamily>(scene_, store_, raw_count,
@@ -72,9 +74,7 @@ void Simulation::create_families() {
     distance_ = distance.get();
     families_.push_back(std::move(distance));
   }
-  families_.push_back(std::make_unique<ColliderFamily>(
-      scene_, store_, fluid_ ? fluid_->solver().particle_radius() : 0.0f,
-      cloth_ ? cloth_->solver().collision_radius() : std::span<const float>()));
+  families_.push_back(std::make_unique<ColliderFamily>(scene_, store_));
 }
 
 // A particle created outside the domain would be projected onto its wall by the first substep,
@@ -213,21 +213,25 @@ void Simulation::restore_state(const ParticleStore& saved, int frames_done) {
   std::vector<std::uint32_t> order(n);
   for (std::size_t k = 0; k < n; ++k) order[k] = index_of_id[std::size_t(saved.id[k])];
   reorder(order);
-  auto copy = [n](auto& to, const auto& from) { std::copy(from.data(), from.data() + n, to.data()); };
-  copy(store_.x, saved.x), copy(store_.y, saved.y), copy(store_.z, saved.z);
-  copy(store_.px, saved.px), copy(store_.py, saved.py), copy(store_.pz, saved.pz);
-  copy(store_.vx, saved.vx), copy(store_.vy, saved.vy), copy(store_.vz, saved.vz);
-  copy(store_.w, saved.w), copy(store_.phase, saved.phase), copy(store_.id, saved.id);
+  for (const StoreColumn& to : store_.columns()) {
+    if (to.kind != ColumnKind::State) continue;
+    const StoreColumn* from = saved.find(to.name);
+    if (from == nullptr || from->type() != to.type())
+      throw std::invalid_argument("Simulation::restore_state: the saved state has no column " + to.name);
+    std::memcpy(store_.find(to.name)->raw(), from->raw(), n * StoreColumn::kElementBytes);
+  }
   frame_ = frames_done;
   time_ = frame_ * scene_.solver.frame_dt;
 }
 
-std::span<const float> Simulation::cloth_stretch_multipliers() const {
-  return cloth_ ? cloth_->solver().stretch_multipliers() : std::span<const float>();
+CheckpointChunks Simulation::family_state() const {
+  CheckpointChunks chunks;
+  for (const auto& f : families_) f->save_state(chunks);
+  return chunks;
 }
 
-void Simulation::restore_cloth_stretch_multipliers(std::span<const float> saved) {
-  if (cloth_) cloth_->solver().restore_stretch_multipliers(saved);
+void Simulation::restore_family_state(const CheckpointChunks& chunks) {
+  for (const auto& f : families_) f->restore_state(chunks);
 }
 
 FrameMetrics Simulation::state_metrics() const {

@@ -5,6 +5,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <bit>
 #include <cerrno>
 #include <cstring>
@@ -22,8 +23,7 @@ namespace {
 static_assert(std::endian::native == std::endian::little, "checkpoints are written little-endian");
 
 constexpr char kMagic[8] = {'S', 'E', 'I', 'C', 'H', 'E', 'C', 'P'};
-constexpr std::uint32_t kFormatVersion = 2;
-constexpr std::uint32_t kColumnCount = 12;  // x y z px py pz vx vy vz w phase id
+constexpr std::uint32_t kFormatVersion = 3;
 constexpr std::size_t kPreambleBytes = sizeof(kMagic) + 4 + 8 + 8;
 
 template <class T>
@@ -31,9 +31,9 @@ void put(std::string& out, const T& value) {
   out.append(reinterpret_cast<const char*>(&value), sizeof(T));
 }
 
-template <class T>
-void put_column(std::string& out, const AlignedColumn<T>& column, std::size_t n) {
-  out.append(reinterpret_cast<const char*>(column.data()), n * sizeof(T));
+void put_string(std::string& out, std::string_view s) {
+  put(out, std::uint32_t(s.size()));
+  out.append(s);
 }
 
 // Reads the body front to back; running past its end is a truncated (or lying) file.
@@ -43,37 +43,85 @@ class BodyReader {
       : bytes_(bytes), file_(file) {}
 
   template <class T>
-  T get(const char* what) {
+  T get(std::string_view what) {
     T value;
     take(&value, sizeof(T), what);
     return value;
   }
-  std::string get_string(const char* what) {
+  std::string get_string(std::string_view what) {
     const auto size = get<std::uint32_t>(what);
     if (size > 256) corrupt(fmt::format("{} is {} bytes long", what, size));
     std::string s(size, '\0');
     take(s.data(), size, what);
     return s;
   }
-  template <class T>
-  void get_column(AlignedColumn<T>& column, std::size_t n, const char* what) {
-    take(column.data(), n * sizeof(T), what);
+  /// `size` bytes into `to`; running past the end is a truncated file.
+  void take(void* to, std::size_t size, std::string_view what) {
+    if (size > remaining()) corrupt(fmt::format("it ends inside {}", what));
+    if (size > 0) std::memcpy(to, bytes_.data() + at_, size);
+    at_ += size;
   }
   std::size_t remaining() const { return bytes_.size() - at_; }
   [[noreturn]] void corrupt(const std::string& why) const {
     throw ResumeError(fmt::format("{}: corrupt checkpoint: {}", file_.string(), why));
   }
+  [[noreturn]] void refuse(const std::string& why) const {
+    throw ResumeError(fmt::format("{}: {}", file_.string(), why));
+  }
 
  private:
-  void take(void* to, std::size_t size, const char* what) {
-    if (size > remaining()) corrupt(fmt::format("it ends inside {}", what));
-    std::memcpy(to, bytes_.data() + at_, size);
-    at_ += size;
-  }
   std::string_view bytes_;
   const std::filesystem::path& file_;
   std::size_t at_ = 0;
 };
+
+// The State columns by name, into a store of the file's particle count. A name the built-in
+// table does not have becomes a State column of its own (a family's, for restore_checkpoint to
+// match); every built-in State column must be there.
+void read_columns(BodyReader& r, ParticleStore& s, std::uint32_t count) {
+  std::vector<std::string> read;
+  for (std::uint32_t k = 0; k < count; ++k) {
+    std::string name = r.get_string("a column name");
+    const auto type = r.get<std::uint8_t>(fmt::format("the type of column '{}'", name));
+    if (type > std::uint8_t(ColumnType::I32)) r.corrupt(fmt::format("column '{}' has type {}", name, type));
+    if (std::find(read.begin(), read.end(), name) != read.end())
+      r.corrupt(fmt::format("column '{}' appears twice", name));
+    StoreColumn* column = s.find(name);
+    if (column == nullptr) {
+      switch (ColumnType(type)) {
+        case ColumnType::F32: s.add_column<float>(name, ColumnKind::State); break;
+        case ColumnType::U32: s.add_column<std::uint32_t>(name, ColumnKind::State); break;
+        case ColumnType::I32: s.add_column<std::int32_t>(name, ColumnKind::State); break;
+      }
+      column = s.find(name);
+    }
+    if (column->kind != ColumnKind::State)
+      r.refuse(fmt::format("the checkpoint holds column '{}', which this seiche does not checkpoint", name));
+    if (column->type() != ColumnType(type))
+      r.corrupt(fmt::format("column '{}' is {}, this seiche keeps it as {}", name,
+                            column_type_name(ColumnType(type)), column_type_name(column->type())));
+    r.take(column->raw(), s.size() * StoreColumn::kElementBytes, fmt::format("column '{}'", name));
+    read.push_back(std::move(name));
+  }
+  for (const StoreColumn& c : s.columns())
+    if (c.kind == ColumnKind::State && std::find(read.begin(), read.end(), c.name) == read.end())
+      r.refuse(fmt::format("the checkpoint has no column '{}'", c.name));
+}
+
+void read_chunks(BodyReader& r, CheckpointChunks& chunks) {
+  const auto count = r.get<std::uint32_t>("the chunk count");
+  for (std::uint32_t k = 0; k < count; ++k) {
+    std::string name = r.get_string("a chunk name");
+    const auto size = r.get<std::uint64_t>(fmt::format("the size of chunk '{}'", name));
+    if (size > r.remaining())
+      r.corrupt(fmt::format("it ends inside chunk '{}' ({} bytes announced, {} left)", name, size,
+                            r.remaining()));
+    if (chunks.find(name) != nullptr) r.corrupt(fmt::format("chunk '{}' appears twice", name));
+    std::string bytes(size, '\0');
+    r.take(bytes.data(), size, fmt::format("chunk '{}'", name));
+    chunks.put(std::move(name), std::move(bytes));
+  }
+}
 
 }  // namespace
 
@@ -89,22 +137,28 @@ std::string encode_checkpoint(const Simulation& sim, std::uint64_t scene_fingerp
   const ParticleStore& s = sim.particles();
   const std::size_t n = s.size();
   std::string body;
-  body.reserve(64 + n * kColumnCount * 4);
-  const std::string_view version = SEICHE_VERSION;
-  put(body, std::uint32_t(version.size()));
-  body.append(version);
+  std::vector<const StoreColumn*> state;
+  for (const StoreColumn& c : s.columns())
+    if (c.kind == ColumnKind::State) state.push_back(&c);
+  const CheckpointChunks chunks = sim.family_state();
+  body.reserve(256 + n * state.size() * StoreColumn::kElementBytes);
+  put_string(body, SEICHE_VERSION);
   put(body, scene_fingerprint);
   put(body, std::int32_t(sim.frame()));
   put(body, sim.time());
   put(body, std::uint64_t(n));
-  put(body, kColumnCount);
-  for (const FloatColumn* c : {&s.x, &s.y, &s.z, &s.px, &s.py, &s.pz, &s.vx, &s.vy, &s.vz, &s.w})
-    put_column(body, *c, n);
-  put_column(body, s.phase, n);
-  put_column(body, s.id, n);
-  const std::span<const float> multipliers = sim.cloth_stretch_multipliers();
-  put(body, std::uint64_t(multipliers.size()));
-  for (float v : multipliers) put(body, v);
+  put(body, std::uint32_t(state.size()));
+  for (const StoreColumn* c : state) {
+    put_string(body, c->name);
+    put(body, std::uint8_t(c->type()));
+    body.append(c->raw(), n * StoreColumn::kElementBytes);
+  }
+  put(body, std::uint32_t(chunks.all().size()));
+  for (const CheckpointChunks::Chunk& c : chunks.all()) {
+    put_string(body, c.name);
+    put(body, std::uint64_t(c.bytes.size()));
+    body += c.bytes;
+  }
 
   std::string file;
   file.reserve(kPreambleBytes + body.size());
@@ -151,25 +205,16 @@ Checkpoint read_checkpoint(const std::filesystem::path& file) {
   const auto n = r.get<std::uint64_t>("the particle count");
   const auto columns = r.get<std::uint32_t>("the column count");
   if (cp.frame < 0) r.corrupt(fmt::format("negative frame number {}", cp.frame));
-  if (columns != kColumnCount)
-    r.corrupt(fmt::format("{} columns, expected {}", columns, kColumnCount));
-  constexpr std::size_t kBytesPerParticle = kColumnCount * 4;
-  if (n > r.remaining() / kBytesPerParticle || n * kBytesPerParticle + 8 > r.remaining())
-    r.corrupt(fmt::format("{} particles need {} bytes of columns, the file holds {}", n,
-                          n * kBytesPerParticle, r.remaining()));
+  // Sizes before allocations: every column holds n values of 4 bytes.
+  constexpr std::size_t kBytes = StoreColumn::kElementBytes;
+  if (columns == 0 || n > r.remaining() / kBytes / columns)
+    r.corrupt(fmt::format("{} columns of {} particles need {} bytes, the file holds {}", columns, n,
+                          columns * n * kBytes, r.remaining()));
   ParticleStore& s = cp.state;
   s.resize(n);
-  const char* names[] = {"x", "y", "z", "px", "py", "pz", "vx", "vy", "vz", "w"};
-  int k = 0;
-  for (FloatColumn* c : {&s.x, &s.y, &s.z, &s.px, &s.py, &s.pz, &s.vx, &s.vy, &s.vz, &s.w})
-    r.get_column(*c, n, names[k++]);
-  r.get_column(s.phase, n, "phase");
-  r.get_column(s.id, n, "id");
-  const auto m = r.get<std::uint64_t>("the multiplier count");
-  if (m > r.remaining() / 4 || m * 4 != r.remaining())
-    r.corrupt(fmt::format("{} multipliers need {} bytes, the file holds {}", m, m * 4, r.remaining()));
-  cp.stretch_multipliers.resize(m);
-  for (float& v : cp.stretch_multipliers) v = r.get<float>("a multiplier");
+  read_columns(r, s, columns);
+  read_chunks(r, cp.chunks);
+  if (r.remaining() != 0) r.corrupt(fmt::format("{} bytes after the last chunk", r.remaining()));
   std::vector<bool> seen(n, false);
   for (std::size_t i = 0; i < n; ++i) {
     const std::int32_t id = s.id[i];
@@ -196,11 +241,34 @@ void restore_checkpoint(Simulation& sim, const Checkpoint& cp, std::uint64_t sce
   if (cp.state.size() != sim.particles().size())
     throw ResumeError(fmt::format("{}: the checkpoint holds {} particles, the scene has {}",
                                   file.string(), cp.state.size(), sim.particles().size()));
-  if (cp.stretch_multipliers.size() != sim.cloth_stretch_multipliers().size())
-    throw ResumeError(fmt::format("{}: the checkpoint holds {} cloth multipliers, the scene has {}", file.string(),
-                                  cp.stretch_multipliers.size(), sim.cloth_stretch_multipliers().size()));
+  auto refuse = [&](const std::string& why) { throw ResumeError(fmt::format("{}: {}", file.string(), why)); };
+  // The State columns of the checkpoint are exactly those of this store (built-ins and the
+  // scene's families' own), and so are the chunks of the families.
+  const ParticleStore& store = sim.particles();
+  for (const StoreColumn& c : cp.state.columns()) {
+    if (c.kind != ColumnKind::State) continue;
+    const StoreColumn* mine = store.find(c.name);
+    if (mine == nullptr || mine->kind != ColumnKind::State || mine->type() != c.type())
+      refuse(fmt::format("the checkpoint holds column '{}' that this seiche does not know", c.name));
+  }
+  for (const StoreColumn& c : store.columns()) {
+    const StoreColumn* saved = cp.state.find(c.name);
+    if (c.kind == ColumnKind::State && (saved == nullptr || saved->kind != ColumnKind::State))
+      refuse(fmt::format("the checkpoint has no column '{}', which this scene needs", c.name));
+  }
+  const CheckpointChunks expected = sim.family_state();
+  for (const CheckpointChunks::Chunk& c : cp.chunks.all())
+    if (expected.find(c.name) == nullptr)
+      refuse(fmt::format("the checkpoint holds chunk '{}' that this seiche does not know", c.name));
+  for (const CheckpointChunks::Chunk& c : expected.all())
+    if (cp.chunks.find(c.name) == nullptr)
+      refuse(fmt::format("the checkpoint has no chunk '{}', which this scene needs", c.name));
   sim.restore_state(cp.state, cp.frame);
-  sim.restore_cloth_stretch_multipliers(cp.stretch_multipliers);
+  try {
+    sim.restore_family_state(cp.chunks);  // each family checks its chunks' sizes
+  } catch (const ResumeError& e) {
+    refuse(e.what());
+  }
 }
 
 }  // namespace seiche

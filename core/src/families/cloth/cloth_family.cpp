@@ -28,4 +28,18 @@ void ClothFamily::measure(FrameMetrics& m) {
   m.errors.push_back({"cloth_bending_error", "cloth bending", ErrorUnit::Radians, e.bending_mean, e.bending_max});
 }
 
+namespace {
+constexpr const char* kStretchMultipliers = "cloth.stretch_multipliers";
+}
+
+void ClothFamily::save_state(CheckpointChunks& chunks) const {
+  chunks.put_values(kStretchMultipliers, solver_->stretch_multipliers());
+}
+
+void ClothFamily::restore_state(const CheckpointChunks& chunks) {
+  std::vector<float> saved(solver_->stretch_multipliers().size());
+  chunks.get_values(kStretchMultipliers, std::span<float>(saved));
+  solver_->restore_stretch_multipliers(saved);
+}
+
 }  // namespace seiche

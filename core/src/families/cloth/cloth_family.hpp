@@ -1,7 +1,8 @@
 // The cloths of a scene (cloth_solver.hpp): their vertices in the store, the XPBD multipliers
 // reset every substep, stretch, bending and tethers every iteration (the colored stretch and
 // bending on the iteration record), the constraints' particle indices remapped after a reorder,
-// strain and bending error measured at the end of a frame.
+// strain and bending error measured at the end of a frame, the stretch multipliers carried
+// across substeps saved in checkpoints.
 #pragma once
 
 #include <memory>
@@ -31,6 +32,11 @@ class ClothFamily final : public Family {
   void remap(std::span<const std::uint32_t> new_index) override { solver_->remap(new_index); }
   kernels::IndexRange packed_range() const override { return solver_->packed_range(); }
   void measure(FrameMetrics& m) override;
+  /// The stretch forests' multipliers of the last substep, which their geometric stiffness reads
+  /// in the next one (kernels/distance_tree.hpp): chunk "cloth.stretch_multipliers", in the
+  /// constraints' (scene-determined) order, empty without forests.
+  void save_state(CheckpointChunks& chunks) const override;
+  void restore_state(const CheckpointChunks& chunks) override;
 
  private:
   ParticleStore& store_;

@@ -10,7 +10,7 @@
 
 #include "store/blocked_reduce.hpp"
 #include "seiche/kernels/dihedral_bending.hpp"
-#include "seiche/kernels/phase.hpp"
+#include "seiche/phase.hpp"
 
 namespace seiche {
 
@@ -162,6 +162,7 @@ void ClothSolver::create(ParticleStore& store, std::size_t first, const kernels:
       const double area = topo.vertex_area[v] > 0.0 ? topo.vertex_area[v] : mean_area;
       store.w[k] = pinned[v] ? 0.0f : float(1.0 / (def.mass_per_area * area));
       store.phase[k] = make_phase(Material::Cloth, std::uint32_t(c));
+      store.radius[k] = radius_[c];
     }
 
     for (const auto& e : topo.edges) {

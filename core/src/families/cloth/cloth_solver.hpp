@@ -59,15 +59,13 @@ class ClothSolver {
   std::int32_t first_id(std::size_t c) const { return first_id_[c]; }
 
   /// Fills store particles [first, first + vertex_count()) with the cloths' vertices (positions,
-  /// velocities, inverse masses, phases; ids are set by the caller as creation indices) and
-  /// builds the constraints on those rest positions.
+  /// velocities, inverse masses, phases, collision radii: half the thickness; ids are set by the
+  /// caller as creation indices) and builds the constraints on those rest positions.
   void create(ParticleStore& store, std::size_t first, const kernels::ParticleView& view);
 
   bool has_bending() const { return dihedral_.size() + isometric_.size() > 0; }
   bool has_dihedral_bending() const { return dihedral_.size() > 0; }
   bool has_tethers() const { return tethers_.groups() > 0; }
-  /// Half the thickness of each cloth: its particles' collision radius.
-  std::span<const float> collision_radius() const { return radius_; }
   /// Contact distance of cloth c's particles with each other (its thickness).
   float thickness(std::size_t c) const { return scene_cloths_[c].thickness; }
   bool self_collision(std::size_t c) const { return scene_cloths_[c].self_collision; }

@@ -67,16 +67,12 @@ kernels::CollisionShape to_shape(const ColliderDef& c, const MeshSdf* sdf) {
 
 }  // namespace
 
-ColliderFamily::ColliderFamily(const SceneDef& scene, ParticleStore& store, float fluid_radius,
-                               std::span<const float> cloth_radius)
-    : store_(store) {
+ColliderFamily::ColliderFamily(const SceneDef& scene, ParticleStore& store) : store_(store) {
   for (int a = 0; a < 3; ++a) {
     params_.domain_min[a] = scene.domain.min[a];
     params_.domain_max[a] = scene.domain.max[a];
   }
   params_.domain_friction = scene.domain.friction;
-  params_.fluid_radius = fluid_radius;
-  if (!cloth_radius.empty()) params_.cloth_radius = cloth_radius.data();
   for (std::size_t k = 0; k < scene.colliders.size(); ++k) {
     const ColliderDef& c = scene.colliders[k];
     if (c.shape == ColliderDef::Shape::Mesh) mesh_sdfs_.push_back(build_collider_sdf(c, k));

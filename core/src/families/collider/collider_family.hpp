@@ -4,7 +4,6 @@
 #pragma once
 
 #include <memory>
-#include <span>
 #include <vector>
 
 #include "loop/family.hpp"
@@ -17,10 +16,9 @@ namespace seiche {
 
 class ColliderFamily final : public Family {
  public:
-  /// `fluid_radius`: the fluid particles' collision radius (0 without fluid); `cloth_radius`:
-  /// the cloth particles' radii by cloth (empty without cloth; the family keeps the pointer).
-  ColliderFamily(const SceneDef& scene, ParticleStore& store, float fluid_radius,
-                 std::span<const float> cloth_radius);
+  /// Every particle keeps its store radius (the radius column, written by its family) from
+  /// the colliders' surfaces.
+  ColliderFamily(const SceneDef& scene, ParticleStore& store);
 
   void add_passes(std::vector<Pass>& passes) override;
 

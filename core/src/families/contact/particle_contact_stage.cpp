@@ -5,7 +5,7 @@
 
 #include <tbb/parallel_for.h>
 
-#include "seiche/kernels/phase.hpp"
+#include "seiche/phase.hpp"
 
 namespace seiche {
 

@@ -43,6 +43,7 @@ FluidFamily::FluidFamily(const SceneDef& scene, ParticleStore& store, std::size_
           store.vx[k] = f.velocity[0], store.vy[k] = f.velocity[1], store.vz[k] = f.velocity[2];
           store.w[k] = 1.0f / solver_->particle_mass();
           store.phase[k] = make_phase(Material::Fluid, std::uint32_t(b));
+          store.radius[k] = solver_->particle_radius();
         }
   }
   // The grid covers the domain (grown by one cell); particles outside clamp to border cells.

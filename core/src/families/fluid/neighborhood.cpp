@@ -3,7 +3,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
-#include "seiche/kernels/phase.hpp"
+#include "seiche/phase.hpp"
 
 namespace seiche {
 

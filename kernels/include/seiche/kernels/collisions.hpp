@@ -6,7 +6,8 @@
 //   otherwise:       p -= dx_t * mu d / |dx_t|          (kinetic: slides, slowed)
 // Shapes: the domain box (particles stay inside), half-spaces (plane), solid boxes, spheres,
 // capsules (segment a-b grown by a radius) and signed distance fields (triangle meshes).
-// A particle's radius depends on its material: fluid_radius, cloth_radius[group], else 0.
+// A particle's radius is its entry in the radius column (ParticleView::radius): the families
+// write it at creation (a fluid's particle radius, half a cloth's thickness, 0 for raw particles).
 // Pinned particles (w = 0) are not moved.
 #pragma once
 
@@ -32,8 +33,6 @@ struct CollisionParams {
   float domain_min[3] = {0, 0, 0};
   float domain_max[3] = {1, 1, 1};
   float domain_friction = 0.0f;
-  float fluid_radius = 0.0f;  ///< collision radius of fluid particles
-  const float* cloth_radius = nullptr;  ///< per cloth (phase group): half its thickness
 };
 
 void solve_collisions(const ParticleView& p, const CollisionParams& params,

@@ -13,7 +13,7 @@ struct ParticleView {
   float *px = nullptr, *py = nullptr, *pz = nullptr;  // predicted positions
   float *vx = nullptr, *vy = nullptr, *vz = nullptr;  // velocities
   const float* w = nullptr;                           // inverse masses (0 = pinned)
-  const std::uint32_t* phase = nullptr;               // material | group << 8
+  const float* radius = nullptr;                      // collision radii (m)
 };
 
 /// A neighbor list in CSR form: neighbors of i are indices[offsets[i] .. offsets[i+1]).

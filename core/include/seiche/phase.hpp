@@ -1,5 +1,6 @@
 // The phase word of a particle: its material in the low 8 bits and its object (group) index in
-// the high 24 bits. Shared by the kernels (which branch on material) and the host.
+// the high 24 bits. Host code only (the neighbor grid, the particle contacts, the exporters):
+// kernels know no materials, they read per-particle columns such as the collision radius.
 #pragma once
 
 #include <cstdint>
