@@ -11,6 +11,7 @@
 
 #include <tbb/global_control.h>
 
+#include "seiche/kernels/blocked_reduce.hpp"
 #include "seiche/kernels/collisions.hpp"
 #include "seiche/kernels/distance_constraint.hpp"
 #include "seiche/kernels/integrate.hpp"
@@ -138,6 +139,26 @@ TEST(DistanceConstraint, CoincidentParticlesStayFinite) {
   color_distance_constraints(i, j, rest, compliance, 2, c);
   solve_distance_constraints(p.view(), c, 0.01f);
   for (float v : {p.px[0], p.py[0], p.pz[0], p.px[1], p.py[1], p.pz[1]}) EXPECT_TRUE(std::isfinite(v));
+}
+
+// The strain of a constraint at the particles' positions: |l - d| / d, and |l - d| in metres for
+// d = 0; the error metric is its mean and max.
+TEST(DistanceConstraint, EdgeStrainIsTheRelativeLengthError) {
+  Particles p(3);
+  p.set(0, 0, 0, 0);
+  p.set(1, 3, 4, 0);  // |0 - 1| = 5
+  p.set(2, 3, 4, 12);  // |1 - 2| = 12
+  EXPECT_DOUBLE_EQ(edge_strain(p.view(), 0, 1, 4.0f), 0.25);
+  EXPECT_DOUBLE_EQ(edge_strain(p.view(), 1, 0, 10.0f), 0.5);  // compressed: |5 - 10| / 10
+  EXPECT_DOUBLE_EQ(edge_strain(p.view(), 0, 1, 5.0f), 0.0);
+  EXPECT_DOUBLE_EQ(edge_strain(p.view(), 0, 1, 0.0f), 5.0);  // zero rest length: metres
+  DistanceConstraints c;
+  const std::uint32_t i[] = {0, 1}, j[] = {1, 2};
+  const float rest[] = {4.0f, 16.0f}, compliance[] = {0.0f, 0.0f};
+  color_distance_constraints(i, j, rest, compliance, 3, c);
+  const DistanceError e = distance_constraint_error(p.view(), c);
+  EXPECT_DOUBLE_EQ(e.mean, 0.25);  // (0.25 + 0.25) / 2
+  EXPECT_DOUBLE_EQ(e.max, 0.25);
 }
 
 TEST(DistanceConstraint, ColoringSeparatesSharedParticles) {
@@ -647,4 +668,56 @@ TEST(Collisions, PinnedParticlesStayAndNaNIsNotHidden) {
   solve_collisions(p.view(), params, {});
   EXPECT_EQ(p.px[0], -1.0f);
   EXPECT_TRUE(std::isnan(p.px[1]));  // the run's finite check reports it
+}
+
+// ---- Blocked reductions -----------------------------------------------------------------------
+
+// The sum of values of very different magnitudes depends on the order of the additions: the
+// blocked reduction adds each block in index order and the blocks in block order, with the same
+// bits as that serial computation, with 1 and 2 threads and any block size.
+TEST(BlockedReduce, SumsBlocksInIndexOrderThenBlocksInOrder) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> mantissa(1.0, 2.0);
+  std::uniform_int_distribution<int> exponent(-30, 30);
+  const std::size_t n = 3 * kReduceBlock + 17;  // three full blocks and a partial one
+  std::vector<double> v(n);
+  for (double& x : v) x = std::ldexp(mantissa(rng), exponent(rng)) * (rng() % 2 ? 1.0 : -1.0);
+  const auto reduce = [&](std::size_t block) {
+    return blocked_reduce(
+        n, 0.0,
+        [&](std::size_t b, std::size_t e) {
+          double s = 0.0;
+          for (std::size_t i = b; i < e; ++i) s += v[i];
+          return s;
+        },
+        [](double& acc, double s) { acc += s; }, block);
+  };
+  for (const std::size_t block : {kReduceBlock, std::size_t(1000), std::size_t(1)}) {
+    double expected = 0.0;
+    for (std::size_t b = 0; b < n; b += block) {
+      double s = 0.0;
+      for (std::size_t i = b; i < std::min(n, b + block); ++i) s += v[i];
+      expected += s;
+    }
+    for (const int threads : {1, 2}) {
+      const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+      const double got = reduce(block);
+      EXPECT_EQ(std::memcmp(&got, &expected, sizeof got), 0)
+          << "block " << block << ", " << threads << " threads: " << got << " vs " << expected;
+    }
+  }
+  // An empty range is the identity; a max combines like a sum.
+  EXPECT_EQ(blocked_reduce(
+                0, 7.0, [](std::size_t, std::size_t) { return 1.0; },
+                [](double& acc, double s) { acc += s; }),
+            7.0);
+  const double max = blocked_reduce(
+      n, 0.0,
+      [&](std::size_t b, std::size_t e) {
+        double m = 0.0;
+        for (std::size_t i = b; i < e; ++i) m = std::max(m, v[i]);
+        return m;
+      },
+      [](double& acc, double m) { acc = std::max(acc, m); });
+  EXPECT_EQ(max, *std::max_element(v.begin(), v.end()));
 }

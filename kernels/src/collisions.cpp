@@ -12,8 +12,6 @@
 // this against a scalar reference); a batch with no particle past a wall only compares.
 #include "seiche/kernels/collisions.hpp"
 
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
 #include <cmath>
 
@@ -176,14 +174,11 @@ SEICHE_INLINE inline void collide_domain(const ParticleView& v, const CollisionP
 
 void solve_collisions(const ParticleView& p, const CollisionParams& params,
                       std::span<const CollisionShape> shapes) {
-  const std::size_t batches = (p.n + kLanes - 1) / kLanes;
-  tbb::parallel_for(
-      tbb::blocked_range<std::size_t>(0, batches, kBatchesPerTask), [&](const auto& r) {
-        const std::size_t begin = r.begin() * kLanes, end = std::min(p.n, r.end() * kLanes);
-        if (!shapes.empty()) collide_shapes(p, shapes, begin, end);
-        for (std::size_t i = begin; i < end; i += kLanes)
-          collide_domain(p, params, Lanes{i, std::min(kLanes, end - i)});
-      });
+  simd::parallel_batches(0, p.n, kBatchesPerTask, [&](std::size_t begin, std::size_t end) {
+    if (!shapes.empty()) collide_shapes(p, shapes, begin, end);
+    for (std::size_t i = begin; i < end; i += kLanes)
+      collide_domain(p, params, Lanes{i, std::min(kLanes, end - i)});
+  });
 }
 
 }  // namespace seiche::kernels

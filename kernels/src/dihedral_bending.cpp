@@ -1,5 +1,6 @@
 // Dihedral-angle bending, XPBD (dihedral_bending.hpp has the model). For hinge (a, b, c, d),
-// e = b - a, n1 = e x (c - a), n2 = (d - b) x e (the normals of hinges.hpp):
+// e = b - a, n1 = e x (c - a), n2 = (d - b) x e (the normals of hinges.hpp; theta and the
+// degenerate test are hinge_angle.hpp's):
 //   C = theta - theta0, wrapped into (-pi, pi]
 //   grad_c = -|e| n1 / |n1|^2,   grad_d = -|e| n2 / |n2|^2       (a wing turns about the edge
 //                                                                  by its displacement / height)
@@ -15,6 +16,7 @@
 #include <type_traits>
 
 #include "colored_batches.hpp"
+#include "hinge_angle.hpp"
 
 namespace seiche::kernels {
 
@@ -33,22 +35,19 @@ SEICHE_INLINE inline T dihedral_step(const V3<T> p[4], const T w[4], const T& re
                                      const T& lambda, V3<T> dp[4]) {
   const T zero(0.0f), one(1.0f), pi(std::numbers::pi_v<float>),
       minus_pi(-std::numbers::pi_v<float>), two_pi(2.0f * std::numbers::pi_v<float>);
-  const V3<T> e = p[1] - p[0], ac = p[2] - p[0], ad = p[3] - p[0], bd = p[3] - p[1];
-  const V3<T> n1 = cross(e, ac), n2 = cross(bd, e);
-  const T e2 = dot(e, e), n1sq = dot(n1, n1), n2sq = dot(n2, n2);
-  const T min_wing = T(kHingeMinWing) * e2 * e2;
-  const MaskOf<T> ok = (e2 > T(kHingeMinEdge2)) & (n1sq > min_wing) & (n2sq > min_wing) &
-                       (w[0] + w[1] + w[2] + w[3] > zero);
+  const HingeFrame<T> h(p);
+  const MaskOf<T> ok = has_angle(h) & (w[0] + w[1] + w[2] + w[3] > zero);
   // Where the hinge is skipped, divide by 1 instead: every lane stays finite.
-  const T e2_safe = select(ok, e2, one);
+  const T e2_safe = select(ok, h.e2, one);
   const T len = colored::vsqrt(e2_safe);
-  T C = simd::atan2(dot(cross(n1, n2), e) / len, dot(n1, n2)) - rest;
+  T C = hinge_angle(h, len, [](const T& y, const T& x) { return simd::atan2(y, x); }) - rest;
   C = select(C > pi, C - two_pi, C);
   C = select(C <= minus_pi, C + two_pi, C);
 
-  const V3<T> gc = n1 * (simd::negate(len) / select(ok, n1sq, one));
-  const V3<T> gd = n2 * (simd::negate(len) / select(ok, n2sq, one));
-  const T sc = dot(ac, e) / e2_safe, sd = dot(ad, e) / e2_safe;
+  const V3<T> gc = h.n1 * (simd::negate(len) / select(ok, h.n1sq, one));
+  const V3<T> gd = h.n2 * (simd::negate(len) / select(ok, h.n2sq, one));
+  const V3<T> ac = p[2] - p[0], ad = p[3] - p[0];
+  const T sc = dot(ac, h.e) / e2_safe, sd = dot(ad, h.e) / e2_safe;
   const V3<T> ga = gc * (sc - one) + gd * (sd - one);
   const V3<T> gb = gc * simd::negate(sc) - gd * sd;
   const T denom =

@@ -97,11 +97,7 @@ DistanceError distance_constraint_error(const ParticleView& p, const DistanceCon
   if (m == 0) return e;
   double sum = 0.0;
   for (std::size_t k = 0; k < m; ++k) {
-    const std::uint32_t a = c.i[k], b = c.j[k];
-    const double dx = double(p.x[a]) - p.x[b], dy = double(p.y[a]) - p.y[b],
-                 dz = double(p.z[a]) - p.z[b];
-    const double C = std::abs(std::sqrt(dx * dx + dy * dy + dz * dz) - c.rest_length[k]);
-    const double rel = c.rest_length[k] > 0.0f ? C / c.rest_length[k] : C;
+    const double rel = edge_strain(p, c.i[k], c.j[k], c.rest_length[k]);
     sum += rel;
     e.max = std::max(e.max, rel);
   }

@@ -1,7 +1,5 @@
 #include "seiche/kernels/integrate.hpp"
 
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
 
 #include "simd.hpp"
@@ -14,16 +12,6 @@ using simd::Floats;
 using simd::kLanes;
 using simd::Lanes;
 constexpr std::size_t kBatchesPerTask = 1024;  // 8,192 particles with 8 lanes
-
-// body(begin, end) over the particles in parallel, cut at multiples of kLanes (so that only the
-// last batch of all is partial).
-template <class Body>
-void parallel_batches(std::size_t n, Body&& body) {
-  const std::size_t batches = (n + kLanes - 1) / kLanes;
-  tbb::parallel_for(
-      tbb::blocked_range<std::size_t>(0, batches, kBatchesPerTask),
-      [&](const auto& r) { body(r.begin() * kLanes, std::min(n, r.end() * kLanes)); });
-}
 
 // The three passes, lane = particle, written with xsimd: as plain loops g++ left two of them
 // scalar (it ignores __restrict on local pointers, gives up on run-time overlap checks for this
@@ -72,17 +60,20 @@ void predict_positions(const ParticleView& p, float dt, const float gravity[3]) 
   // signed zero, NaN for an infinite g); selecting between the two gives the same bits.
   const float g[3] = {dt * gravity[0], dt * gravity[1], dt * gravity[2]};
   const float g_pinned[3] = {0.0f * g[0], 0.0f * g[1], 0.0f * g[2]};
-  parallel_batches(p.n,
-                   [&](std::size_t b, std::size_t e) { predict_range(p, b, e, dt, g, g_pinned); });
+  simd::parallel_batches(0, p.n, kBatchesPerTask, [&](std::size_t b, std::size_t e) {
+    predict_range(p, b, e, dt, g, g_pinned);
+  });
 }
 
 void update_velocities(const ParticleView& p, float dt) {
   const float inv_dt = 1.0f / dt;
-  parallel_batches(p.n, [&](std::size_t b, std::size_t e) { update_range(p, b, e, inv_dt); });
+  simd::parallel_batches(0, p.n, kBatchesPerTask,
+                         [&](std::size_t b, std::size_t e) { update_range(p, b, e, inv_dt); });
 }
 
 void damp_velocities(const ParticleView& p, float factor) {
-  parallel_batches(p.n, [&](std::size_t b, std::size_t e) { damp_range(p, b, e, factor); });
+  simd::parallel_batches(0, p.n, kBatchesPerTask,
+                         [&](std::size_t b, std::size_t e) { damp_range(p, b, e, factor); });
 }
 
 }  // namespace seiche::kernels

@@ -3,9 +3,6 @@
 // (simd::scatter4 and simd::gather4), in parallel blocks.
 #include "seiche/kernels/packed_positions.hpp"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
 
 #include "simd.hpp"
@@ -17,12 +14,13 @@ namespace {
 using simd::Floats;
 using simd::kLanes;
 
+// body(begin, end) over the range in parallel: a grain of 4,096 records (whole batches), the
+// blocks split evenly over the threads.
 template <class Body>
 void parallel_blocks(IndexRange range, Body&& body) {
-  constexpr std::size_t kBlock = 4096;
-  tbb::parallel_for(
-      tbb::blocked_range<std::size_t>(range.lo, std::size_t(range.hi) + 1, kBlock),
-      [&](const auto& r) { body(r.begin(), r.end()); }, tbb::static_partitioner());
+  constexpr std::size_t kBatchesPerBlock = 4096 / kLanes;
+  simd::parallel_batches(range.lo, std::size_t(range.hi) + 1, kBatchesPerBlock, body,
+                         tbb::static_partitioner());
 }
 
 }  // namespace

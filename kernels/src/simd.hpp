@@ -8,7 +8,14 @@
 // particles' own data is one contiguous load, every lane accumulates its own sums (no horizontal
 // reductions), and a lane's arithmetic does not depend on the other lanes, so results do not
 // depend on how particles are grouped, on the thread count or on the SIMD width.
+//
+// The streaming passes run lane = particle over Lanes, in parallel over batch-aligned blocks
+// (parallel_batches).
 #pragma once
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/partitioner.h>
 
 #include <algorithm>
 #include <cstddef>
@@ -142,5 +149,22 @@ struct Lanes {
     for (std::size_t l = 0; l < active; ++l) column[i + l] = t[l];
   }
 };
+
+/// body(begin, end) over the particles [first, last) in parallel, cut at multiples of kLanes
+/// from `first` (so that only the last batch of all is partial); batches_per_task is TBB's grain
+/// size in batches, `partitioner` TBB's partitioner. A body computes each particle the same way
+/// whatever the cut, so any thread count gives the same bits.
+template <class Body, class Partitioner = tbb::auto_partitioner>
+void parallel_batches(std::size_t first, std::size_t last, std::size_t batches_per_task,
+                      Body&& body, Partitioner&& partitioner = {}) {
+  if (last <= first) return;
+  const std::size_t batches = (last - first + kLanes - 1) / kLanes;
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, batches, batches_per_task),
+      [&](const tbb::blocked_range<std::size_t>& r) {
+        body(first + r.begin() * kLanes, std::min(last, first + r.end() * kLanes));
+      },
+      partitioner);
+}
 
 }  // namespace seiche::kernels::simd

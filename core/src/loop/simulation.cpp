@@ -5,7 +5,6 @@
 #include <cstring>
 #include <stdexcept>
 
-#include "store/blocked_reduce.hpp"
 #include "families/cloth/cloth_family.hpp"
 #include "families/collider/collider_family.hpp"
 #include "families/contact/contact_family.hpp"
@@ -14,6 +13,7 @@
 #include "families/motion/motion_family.hpp"
 #include "family.hpp"
 #include "iteration_record.hpp"
+#include "seiche/kernels/blocked_reduce.hpp"
 
 namespace seiche {
 
@@ -245,7 +245,7 @@ FrameMetrics Simulation::state_metrics() const {
   };
   const Vec3& g = scene_.solver.gravity;
   const Vec3 &lo = scene_.domain.min, &hi = scene_.domain.max;
-  const Health h = blocked_reduce(
+  const Health h = kernels::blocked_reduce(
       store_.size(), Health{},
       [&](std::size_t b, std::size_t e) {
         Health part;

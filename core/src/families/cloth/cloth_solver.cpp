@@ -8,7 +8,7 @@
 
 #include <fmt/format.h>
 
-#include "store/blocked_reduce.hpp"
+#include "seiche/kernels/blocked_reduce.hpp"
 #include "seiche/kernels/dihedral_bending.hpp"
 #include "seiche/phase.hpp"
 
@@ -317,21 +317,19 @@ void ClothSolver::remap(std::span<const std::uint32_t> new_index) {
 
 ClothError ClothSolver::measure(const kernels::ParticleView& p) const {
   ClothError e;
-  // |l - l0| / l0 per edge (rest lengths of a valid mesh are > 0), in fixed blocks.
+  // |l - l0| / l0 per edge (kernels::edge_strain; rest lengths of a valid mesh are > 0), in fixed
+  // blocks.
   struct Strain {
     double sum = 0.0, max = 0.0;
   };
   const std::size_t m = stretch_.size();
-  const Strain strain = blocked_reduce(
+  const Strain strain = kernels::blocked_reduce(
       m, Strain{},
       [&](std::size_t begin, std::size_t end) {
         Strain s;
         for (std::size_t k = begin; k < end; ++k) {
-          const std::uint32_t a = stretch_.i[k], b = stretch_.j[k];
-          const double dx = double(p.x[a]) - p.x[b], dy = double(p.y[a]) - p.y[b], dz = double(p.z[a]) - p.z[b];
-          const double rest = stretch_.rest_length[k];
-          const double c = std::abs(std::sqrt(dx * dx + dy * dy + dz * dz) - rest);
-          const double rel = rest > 0.0 ? c / rest : c;
+          const double rel =
+              kernels::edge_strain(p, stretch_.i[k], stretch_.j[k], stretch_.rest_length[k]);
           s.sum += rel;
           s.max = std::max(s.max, rel);
         }

@@ -5,7 +5,7 @@
 
 #include <tbb/parallel_for.h>
 
-#include "store/blocked_reduce.hpp"
+#include "seiche/kernels/blocked_reduce.hpp"
 #include "seiche/kernels/pbf_walls.hpp"
 #include "seiche/kernels/vorticity_confinement.hpp"
 #include "seiche/kernels/xsph_viscosity.hpp"
@@ -111,7 +111,7 @@ FluidError density_error(const float* rho, std::size_t n, float rest_density) {
   FluidError e;
   if (n == 0) return e;
   const float inv_rest = 1.0f / rest_density;
-  const FluidError sum = blocked_reduce(
+  const FluidError sum = kernels::blocked_reduce(
       n, FluidError{},
       [&](std::size_t b, std::size_t end) {
         FluidError part;

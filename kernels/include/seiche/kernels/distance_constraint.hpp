@@ -13,6 +13,7 @@
 // on the thread count.
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <span>
@@ -53,7 +54,19 @@ void solve_distance_constraints(const PackedPositions& packed, DistanceConstrain
 /// The same on the store's columns (packs and unpacks the constraints' range), accumulating lambda.
 void solve_distance_constraints(const ParticleView& p, DistanceConstraints& c, float dt);
 
-/// |C| / d per constraint (|C| in metres where d = 0), evaluated at positions x, y, z.
+/// The strain of one constraint (or mesh edge) (a, b) of rest length d at positions x, y, z:
+///   |C| / d,  C = |x_a - x_b| - d  (in double; |C| in metres where d = 0).
+/// The error metrics of the distance constraints and of the cloth's edges both use it.
+inline double edge_strain(const ParticleView& p, std::uint32_t a, std::uint32_t b,
+                          float rest_length) {
+  const double dx = double(p.x[a]) - p.x[b], dy = double(p.y[a]) - p.y[b],
+               dz = double(p.z[a]) - p.z[b];
+  const double rest = rest_length;
+  const double c = std::abs(std::sqrt(dx * dx + dy * dy + dz * dz) - rest);
+  return rest > 0.0 ? c / rest : c;
+}
+
+/// edge_strain per constraint (mean and max), evaluated at positions x, y, z.
 struct DistanceError {
   double mean = 0.0, max = 0.0;
 };
