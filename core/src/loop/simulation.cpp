@@ -6,12 +6,10 @@
 #include <stdexcept>
 
 #include "families/cloth/cloth_family.hpp"
-#include "families/collider/collider_family.hpp"
-#include "families/contact/contact_family.hpp"
 #include "families/distance/distance_family.hpp"
 #include "families/fluid/fluid_family.hpp"
-#include "families/motion/motion_family.hpp"
 #include "family.hpp"
+#include "family_registry.hpp"
 #include "iteration_record.hpp"
 #include "seiche/kernels/blocked_reduce.hpp"
 
@@ -26,55 +24,25 @@ Simulation::Simulation(const SceneDef& scene)
 
 Simulation::~Simulation() = default;
 
-// The registry: the families a scene's sections call for, in this order. The particles are
-// created in the same order: raw particles first (their index is the scene's index), then the
-// fluid blocks' lattices, then the cloths' vertices; their ids are those creation indices.
+// The families of the scene's sections, built by the registry's rows (family_registry.hpp):
+// the particle-creating rows, the move into the domain, then the rows over existing particles.
 void Simulation::create_families() {
-  const std::size_t raw_count = scene_.particles.size();
-  const std::size_t fluid_count = FluidFamily::particle_count(scene_);
-  std::unique_ptr<ClothFamily> cloth;
-  if (!scene_.cloths.empty()) cloth = std::make_unique<ClothFamily>(scene_, store_);  // reads the meshes
-  const std::size_t cloth_count = cloth ? cloth->particle_count() : 0;
-  store_.resize(raw_count + fluid_count + cloth_count);
-
-  families_.push_back(std::make_unique<MotionFamily>(store_, scene_.solver));
-  for (std::size_t k = 0; k < raw_count; ++k) {
-    const ParticleDef& p = scene_.particles[k];
-    store_.x[k] = p.x[0], store_.y[k] = p.x[1], store_.z[k] = p.x[2];
-    store_.vx[k] = p.v[0], store_.vy[k] = p.v[1], store_.vz[k] = p.v[2];
-    store_.w[k] = p.mass > 0.0f ? 1.0f / p.mass : 0.0f;
-    store_.phase[k] = make_phase(Material::Free);
-    store_.radius[k] = 0.0f;
-  }
-  if (!scene_.fluids.empty()) {
-    auto fluid = std::make_unique<FluidFamily>(scene_, store_, raw_count,
-                                               [this](std::span<const std::uint32_t> order) { reorder(order); });
-    fluid_ = fluid.get();
-    families_.push_back(std::move(fluid));
-  }
-  for (std::size_t k = 0; k < store_.size(); ++k) {
-    store_.id[k] = std::int32_t(k);
-    store_.px[k] = store_.x[k], store_.py[k] = store_.y[k], store_.pz[k] = store_.z[k];
-  }
-  if (cloth) {
-    const std::size_t first = raw_count + fluid_count;
-    cloth->create(first);
-    for (std::size_t k = first; k < store_.size(); ++k)
-      store_.px[k] = store_.x[k], store_.py[k] = store_.y[k], store_.pz[k] = store_.z[k];
-    cloth_ = cloth.get();
-    families_.push_back(std::move(cloth));
-    if (ParticleContactStage::needed(scene_))
-      families_.push_back(std::make_unique<ContactFamily>(
-          cloth_->solver(), scene_.domain, store_, fluid_ ? &fluid_->neighborhood() : nullptr,
-          fluid_ ? fluid_->solver().particle_radius() : 0.0f));
-  }
+  FamilyBuild build(scene_, store_, families_, [this](std::span<const std::uint32_t> order) { reorder(order); });
+  auto run_rows = [&](FamilyRow::Phase phase) {
+    for (const FamilyRow& row : family_rows()) {
+      if (row.phase != phase) continue;
+      const std::size_t first = store_.size();
+      row.build(build);
+      for (std::size_t k = first; k < store_.size(); ++k)  // the new particles start at rest
+        store_.px[k] = store_.x[k], store_.py[k] = store_.y[k], store_.pz[k] = store_.z[k];
+    }
+  };
+  run_rows(FamilyRow::Phase::Particles);
   move_into_domain();
-  if (!scene_.distance_constraints.empty()) {
-    auto distance = std::make_unique<DistanceFamily>(scene_, store_);
-    distance_ = distance.get();
-    families_.push_back(std::move(distance));
-  }
-  families_.push_back(std::make_unique<ColliderFamily>(scene_, store_));
+  run_rows(FamilyRow::Phase::OnParticles);
+  fluid_ = build.find<FluidFamily>();
+  distance_ = build.find<DistanceFamily>();
+  cloth_ = build.find<ClothFamily>();
 }
 
 // A particle created outside the domain would be projected onto its wall by the first substep,

@@ -1,0 +1,88 @@
+// The family registry's rows (family_registry.hpp says how Simulation runs them). A new family
+// adds its row here: its section, its phase and a builder that adds nothing when the scene
+// lacks the section.
+#include "family_registry.hpp"
+
+#include "families/cloth/cloth_family.hpp"
+#include "families/collider/collider_family.hpp"
+#include "families/contact/contact_family.hpp"
+#include "families/distance/distance_family.hpp"
+#include "families/fluid/fluid_family.hpp"
+#include "families/motion/motion_family.hpp"
+
+namespace seiche {
+
+std::size_t FamilyBuild::add_particles(std::size_t n) {
+  const std::size_t first = store.size();
+  store.resize(first + n);
+  for (std::size_t k = first; k < first + n; ++k) store.id[k] = std::int32_t(k);
+  return first;
+}
+
+namespace {
+
+using Phase = FamilyRow::Phase;
+
+void build_motion(FamilyBuild& b) { b.add(std::make_unique<MotionFamily>(b.store, b.scene.solver)); }
+
+// Raw particles: their store index is their index in "particles" (distance constraints name
+// them by it). No family of their own: the motion and the colliders move them, and the raw
+// distance constraints (an OnParticles row) join them.
+void build_raw_particles(FamilyBuild& b) {
+  const std::size_t first = b.add_particles(b.scene.particles.size());
+  ParticleStore& s = b.store;
+  for (std::size_t k = 0; k < b.scene.particles.size(); ++k) {
+    const ParticleDef& p = b.scene.particles[k];
+    const std::size_t i = first + k;
+    s.x[i] = p.x[0], s.y[i] = p.x[1], s.z[i] = p.x[2];
+    s.vx[i] = p.v[0], s.vy[i] = p.v[1], s.vz[i] = p.v[2];
+    s.w[i] = p.mass > 0.0f ? 1.0f / p.mass : 0.0f;
+    s.phase[i] = make_phase(Material::Free);
+    s.radius[i] = 0.0f;
+  }
+}
+
+void build_fluid(FamilyBuild& b) {
+  if (b.scene.fluids.empty()) return;
+  const std::size_t first = b.add_particles(FluidFamily::particle_count(b.scene));
+  b.add(std::make_unique<FluidFamily>(b.scene, b.store, first, b.reorder));
+}
+
+void build_cloth(FamilyBuild& b) {
+  if (b.scene.cloths.empty()) return;
+  auto cloth = std::make_unique<ClothFamily>(b.scene, b.store);  // builds the meshes
+  const std::size_t first = b.add_particles(cloth->particle_count());
+  b.add(std::move(cloth)).create(first);
+}
+
+void build_contact(FamilyBuild& b) {
+  const ClothFamily* cloth = b.find<ClothFamily>();
+  if (cloth == nullptr || !ParticleContactStage::needed(b.scene)) return;
+  const FluidFamily* fluid = b.find<FluidFamily>();
+  b.add(std::make_unique<ContactFamily>(cloth->solver(), b.scene.domain, b.store,
+                                        fluid ? &fluid->neighborhood() : nullptr,
+                                        fluid ? fluid->solver().particle_radius() : 0.0f));
+}
+
+void build_distance(FamilyBuild& b) {
+  if (b.scene.distance_constraints.empty()) return;
+  b.add(std::make_unique<DistanceFamily>(b.scene, b.store));
+}
+
+void build_colliders(FamilyBuild& b) { b.add(std::make_unique<ColliderFamily>(b.scene, b.store)); }
+
+constexpr FamilyRow kRows[] = {
+    {"motion", Phase::Particles, build_motion},
+    {"particles", Phase::Particles, build_raw_particles},
+    {"fluids", Phase::Particles, build_fluid},
+    {"cloths", Phase::Particles, build_cloth},
+    {"cloths", Phase::OnParticles, build_contact},
+    {"distance_constraints", Phase::OnParticles, build_distance},
+    {"colliders", Phase::OnParticles, build_colliders},
+};
+
+}  // namespace
+
+std::span<const FamilyRow> family_rows() { return kRows; }
+
+}  // namespace seiche
