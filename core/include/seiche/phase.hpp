@@ -11,6 +11,7 @@ enum class Material : std::uint8_t {
   Free = 0,   ///< a raw particle: constraints and colliders only
   Fluid = 1,  ///< Position Based Fluids
   Cloth = 2,  ///< a cloth's vertex; the group is the cloth's index in the scene
+  Shape = 3,  ///< a shape-matched particle; the group is the shape's index in the scene
 };
 
 constexpr std::uint32_t make_phase(Material m, std::uint32_t group = 0) {

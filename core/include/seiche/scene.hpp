@@ -74,6 +74,16 @@ struct FluidDef {
   Vec3 velocity{0.0f, 0.0f, 0.0f};  ///< m/s, initial velocity of every particle of the block
 };
 
+/// One entry of "shapes": a box filled with particles on a lattice (the sites of a fluid block),
+/// kept in its rest shape by shape matching: one cluster per entry, rigid at stiffness 1.
+struct ShapeDef {
+  BoxDef box;                       ///< required; 1 to 1 000 000 particles, inside the domain
+  float spacing = 0.05f;            ///< m (> 0); each particle's collision radius is half of it
+  float density = 1000.0f;          ///< kg/m^3 (> 0): each particle weighs density spacing^3
+  float stiffness = 1.0f;           ///< in (0, 1]: 1 is rigid, less pulls part way each iteration
+  Vec3 velocity{0.0f, 0.0f, 0.0f};  ///< m/s, initial velocity of every particle
+};
+
 /// One entry of "particles": a raw particle (for raw constraints and worked examples).
 struct ParticleDef {
   Vec3 x{0.0f, 0.0f, 0.0f};  ///< m, required, inside the domain
@@ -193,6 +203,7 @@ struct SceneDef {
   std::vector<DistanceConstraintDef> distance_constraints;
   std::vector<ColliderDef> colliders;
   std::vector<ClothDef> cloths;
+  std::vector<ShapeDef> shapes;
   /// The scene file's folder: relative OBJ paths are resolved against it ("" for scene text).
   std::string base_dir;
 };

@@ -52,6 +52,7 @@ inline constexpr int kClothStretch = 20;     //   distance, stretch and bending 
 inline constexpr int kClothBending = 21;
 inline constexpr int kTethers = 22;
 inline constexpr int kParticleContacts = 30;
+inline constexpr int kShapeMatching = 40;    //   after the contacts: its clusters end rigid
 inline constexpr int kCollisions = 100;      //   last: nothing is pushed into a collider after it
 inline constexpr int kUpdate = 0;            // Update
 inline constexpr int kDamping = 0;           // Velocity

@@ -9,6 +9,7 @@
 #include "families/distance/distance_family.hpp"
 #include "families/fluid/fluid_family.hpp"
 #include "families/motion/motion_family.hpp"
+#include "families/shape/shape_family.hpp"
 
 namespace seiche {
 
@@ -55,6 +56,12 @@ void build_cloth(FamilyBuild& b) {
   b.add(std::move(cloth)).create(first);
 }
 
+void build_shapes(FamilyBuild& b) {
+  if (b.scene.shapes.empty()) return;
+  const std::size_t first = b.add_particles(ShapeFamily::particle_count(b.scene));
+  b.add(std::make_unique<ShapeFamily>(b.scene, b.store, first));
+}
+
 void build_contact(FamilyBuild& b) {
   const ClothFamily* cloth = b.find<ClothFamily>();
   if (cloth == nullptr || !ParticleContactStage::needed(b.scene)) return;
@@ -76,6 +83,7 @@ constexpr FamilyRow kRows[] = {
     {"particles", Phase::Particles, build_raw_particles},
     {"fluids", Phase::Particles, build_fluid},
     {"cloths", Phase::Particles, build_cloth},
+    {"shapes", Phase::Particles, build_shapes},
     {"cloths", Phase::OnParticles, build_contact},
     {"distance_constraints", Phase::OnParticles, build_distance},
     {"colliders", Phase::OnParticles, build_colliders},

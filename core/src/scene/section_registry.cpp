@@ -7,6 +7,7 @@
 #include "families/collider/collider_reader.hpp"
 #include "families/distance/distance_reader.hpp"
 #include "families/fluid/fluid_reader.hpp"
+#include "families/shape/shape_reader.hpp"
 
 namespace seiche::detail {
 
@@ -20,6 +21,7 @@ const std::vector<SceneSection>& scene_sections() {
       distance_constraints_section(),
       colliders_section(),
       cloths_section(),
+      shapes_section(),
   };
   return sections;
 }

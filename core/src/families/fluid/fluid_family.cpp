@@ -3,23 +3,13 @@
 #include <algorithm>
 #include <cmath>
 
-namespace seiche {
+#include "families/lattice.hpp"
 
-std::array<std::size_t, 3> FluidFamily::lattice_counts(const FluidDef& f) {
-  std::array<std::size_t, 3> n{};
-  for (int a = 0; a < 3; ++a) {
-    const double extent = double(f.box.max[a]) - f.box.min[a];
-    n[a] = std::size_t(std::max(0.0, std::floor(extent / f.spacing + 1e-4)));
-  }
-  return n;
-}
+namespace seiche {
 
 std::size_t FluidFamily::particle_count(const SceneDef& scene) {
   std::size_t count = 0;
-  for (const FluidDef& f : scene.fluids) {
-    const auto n = lattice_counts(f);
-    count += n[0] * n[1] * n[2];
-  }
+  for (const FluidDef& f : scene.fluids) count += lattice_size(f.box, f.spacing);
   return count;
 }
 
@@ -33,18 +23,14 @@ FluidFamily::FluidFamily(const SceneDef& scene, ParticleStore& store, std::size_
   std::size_t k = first;
   for (std::size_t b = 0; b < scene.fluids.size(); ++b) {
     const FluidDef& f = scene.fluids[b];
-    const auto n = lattice_counts(f);
-    for (std::size_t iz = 0; iz < n[2]; ++iz)
-      for (std::size_t iy = 0; iy < n[1]; ++iy)
-        for (std::size_t ix = 0; ix < n[0]; ++ix, ++k) {
-          store.x[k] = f.box.min[0] + (float(ix) + 0.5f) * f.spacing;
-          store.y[k] = f.box.min[1] + (float(iy) + 0.5f) * f.spacing;
-          store.z[k] = f.box.min[2] + (float(iz) + 0.5f) * f.spacing;
-          store.vx[k] = f.velocity[0], store.vy[k] = f.velocity[1], store.vz[k] = f.velocity[2];
-          store.w[k] = 1.0f / solver_->particle_mass();
-          store.phase[k] = make_phase(Material::Fluid, std::uint32_t(b));
-          store.radius[k] = solver_->particle_radius();
-        }
+    for_each_lattice_site(f.box, f.spacing, [&](float x, float y, float z) {
+      store.x[k] = x, store.y[k] = y, store.z[k] = z;
+      store.vx[k] = f.velocity[0], store.vy[k] = f.velocity[1], store.vz[k] = f.velocity[2];
+      store.w[k] = 1.0f / solver_->particle_mass();
+      store.phase[k] = make_phase(Material::Fluid, std::uint32_t(b));
+      store.radius[k] = solver_->particle_radius();
+      ++k;
+    });
   }
   // The grid covers the domain (grown by one cell); particles outside clamp to border cells.
   const float h = neighborhood_->radius;

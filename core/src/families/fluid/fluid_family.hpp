@@ -28,8 +28,6 @@ class FluidFamily final : public Family {
   /// Reorders the store (new k = old order[k]) and remaps every index held elsewhere.
   using Reorder = std::function<void(std::span<const std::uint32_t> order)>;
 
-  /// The lattice points of a fluid block: (i + 0.5) spacing from box.min along each axis.
-  static std::array<std::size_t, 3> lattice_counts(const FluidDef& block);
   /// Particles of all the scene's fluid blocks.
   static std::size_t particle_count(const SceneDef& scene);
 
