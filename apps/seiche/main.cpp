@@ -28,7 +28,6 @@
 #include "bench_command.hpp"
 #include "seiche/bake.hpp"
 #include "seiche/bench.hpp"
-#include "seiche/cloth_obj_exporter.hpp"
 #include "seiche/kernels/simd_info.hpp"
 #include "seiche/output_files.hpp"
 #include "seiche/runner.hpp"
@@ -131,11 +130,10 @@ std::pair<int, int> parse_frame_range(const std::string& text) {
   return {first, last};
 }
 
-// The exporters of the scene, besides the PLY the bake writes itself: every cloth's OBJ, and the
-// fluid's .vdb and mesh that the output section asks for.
+// The exporters of the scene, besides the PLY the bake writes itself: the families' (every
+// cloth's OBJ), and the fluid's .vdb and mesh that the output section asks for.
 std::vector<std::unique_ptr<seiche::FrameExporter>> make_exporters(const seiche::SceneDef& scene, bool resuming) {
-  std::vector<std::unique_ptr<seiche::FrameExporter>> exporters;
-  if (auto e = seiche::make_cloth_obj_exporter(scene)) exporters.push_back(std::move(e));
+  std::vector<std::unique_ptr<seiche::FrameExporter>> exporters = seiche::family_exporters(scene);
   const seiche::OutputDef& o = scene.output;
   if (!o.any_vdb() && !o.mesh) return exporters;
   std::vector<std::string> asked;

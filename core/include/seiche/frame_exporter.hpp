@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -44,5 +45,10 @@ class FrameExporter {
   /// (OpenVDB): such an exporter is only used through write_frame().
   virtual std::vector<EncodedFile> encode_frame(const FrameView&) const { return {}; }
 };
+
+/// The exporters of the scene's families, in the registry's order (core/src/loop/
+/// family_registry.cpp): every cloth's OBJ today. The fluid's .vdb and mesh exporter lives in
+/// its own target (it links OpenVDB) and the app adds it.
+std::vector<std::unique_ptr<FrameExporter>> family_exporters(const SceneDef& scene);
 
 }  // namespace seiche

@@ -4,6 +4,7 @@
 #include "family_registry.hpp"
 
 #include "families/cloth/cloth_family.hpp"
+#include "seiche/cloth_obj_exporter.hpp"
 #include "families/collider/collider_family.hpp"
 #include "families/contact/contact_family.hpp"
 #include "families/distance/distance_family.hpp"
@@ -82,7 +83,7 @@ constexpr FamilyRow kRows[] = {
     {"motion", Phase::Particles, build_motion},
     {"particles", Phase::Particles, build_raw_particles},
     {"fluids", Phase::Particles, build_fluid},
-    {"cloths", Phase::Particles, build_cloth},
+    {"cloths", Phase::Particles, build_cloth, make_cloth_obj_exporter},
     {"shapes", Phase::Particles, build_shapes},
     {"cloths", Phase::OnParticles, build_contact},
     {"distance_constraints", Phase::OnParticles, build_distance},
@@ -92,5 +93,13 @@ constexpr FamilyRow kRows[] = {
 }  // namespace
 
 std::span<const FamilyRow> family_rows() { return kRows; }
+
+std::vector<std::unique_ptr<FrameExporter>> family_exporters(const SceneDef& scene) {
+  std::vector<std::unique_ptr<FrameExporter>> exporters;
+  for (const FamilyRow& row : kRows)
+    if (row.exporter != nullptr)
+      if (auto e = row.exporter(scene)) exporters.push_back(std::move(e));
+  return exporters;
+}
 
 }  // namespace seiche

@@ -9,7 +9,8 @@
 //      distance constraints, whose rest lengths are the distances after step 2, colliders).
 // A row whose section the scene lacks adds nothing: a family absent from a scene costs nothing.
 // The order of the families built is the order of their error rows in reports, and breaks ties
-// between equal pass keys (pass_order in family.hpp).
+// between equal pass keys (pass_order in family.hpp). A row may also name the family's exporter
+// (family_exporters(), frame_exporter.hpp).
 #pragma once
 
 #include <cstddef>
@@ -19,6 +20,7 @@
 #include <vector>
 
 #include "family.hpp"
+#include "seiche/frame_exporter.hpp"
 #include "seiche/particle_store.hpp"
 #include "seiche/scene.hpp"
 
@@ -64,6 +66,9 @@ struct FamilyRow {
   const char* name;  ///< the scene section it builds from ("motion": every scene)
   Phase phase;
   void (*build)(FamilyBuild& build);
+  /// The family's frame files besides the PLY every bake writes (the cloths' OBJ), or null when
+  /// it has none; the maker returns null when the scene lacks the section.
+  std::unique_ptr<FrameExporter> (*exporter)(const SceneDef& scene) = nullptr;
 };
 
 /// Every row, in table order.

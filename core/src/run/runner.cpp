@@ -9,7 +9,7 @@
 #include "background_writer.hpp"
 #include "progress.hpp"
 #include "run_report.hpp"
-#include "seiche/cloth_obj_exporter.hpp"
+#include "seiche/frame_exporter.hpp"
 #include "seiche/output_files.hpp"
 #include "seiche/simulation.hpp"
 #include "seiche/thread_count.hpp"
@@ -46,7 +46,7 @@ RunResult run_on_threads(const SceneDef& scene, const RunOptions& options, int t
   const int frames = options.frames > 0 ? options.frames : scene.output.frames;
 
   Simulation sim(scene);  // before any folder is made: a scene that cannot be built writes nothing
-  const std::unique_ptr<FrameExporter> cloth_obj = make_cloth_obj_exporter(scene);
+  const std::vector<std::unique_ptr<FrameExporter>> exporters = family_exporters(scene);  // the cloths' OBJ
   if (!options.out_dir.empty()) prepare_output_directory(options.out_dir);
   if (!options.report.empty() && options.report.has_parent_path())
     prepare_output_directory(options.report.parent_path());
@@ -59,11 +59,13 @@ RunResult run_on_threads(const SceneDef& scene, const RunOptions& options, int t
     if (!options.report.empty()) write_file_atomically(options.report, report.dump());
   };
 
-  // A frame's files (the PLY, then each cloth's OBJ) go to disk while the next frame is
-  // simulated; before a frame counts, the previous frame's files are on disk. So a failed write
-  // stops the run one frame later at most, before anything of the next frame is recorded or
-  // written, and every frame before the failed one is complete.
-  BackgroundWriter frame_files(1 + scene.cloths.size());
+  // A frame's files (the PLY, then each family exporter's: each cloth's OBJ) go to disk while the
+  // next frame is simulated; before a frame counts, the previous frame's files are on disk. So a
+  // failed write stops the run one frame later at most, before anything of the next frame is
+  // recorded or written, and every frame before the failed one is complete.
+  std::size_t files_per_frame = 1;
+  for (const auto& e : exporters) files_per_frame += e->files(1).size();
+  BackgroundWriter frame_files(files_per_frame);
   const auto start = Clock::now();
   try {
     for (int f = 1; f <= frames; ++f) {
@@ -76,9 +78,8 @@ RunResult run_on_threads(const SceneDef& scene, const RunOptions& options, int t
       if (!options.out_dir.empty()) {
         frame_files.submit(options.out_dir / frame_file_name("particles", f, "ply"),
                            encode_particles_ply(sim.particles()));
-        if (cloth_obj)
-          for (FrameExporter::EncodedFile& file :
-               cloth_obj->encode_frame({sim.particles(), scene, f, sim.time()}))
+        for (const auto& e : exporters)
+          for (FrameExporter::EncodedFile& file : e->encode_frame({sim.particles(), scene, f, sim.time()}))
             frame_files.submit(options.out_dir / file.name, std::move(file.bytes));
       }
       result.frames = f;
