@@ -37,6 +37,10 @@
 //     neighbors on the other cloth: those within 1.5 r), each pair listed from both sides;
 //     friction 0.3 on a sideways substep motion of up to 0.05 r. active: the fraction of
 //     candidate entries in contact.
+//   ShapeMatching (shape_matching.hpp) on block n in lattice order, cut into rigid clusters of
+//     4 x 4 x 4 particles (n^3 / 64 of them), rest shapes the lattice positions x; one projection
+//     of every cluster per call on the predicted positions (the swirl moved them), restored
+//     before every call, rotations warm-started from the previous call as in a substep.
 //   Triad: the memory-bandwidth yardstick for the roofline in docs/performance.md, a STREAM-like
 //     triad a[i] = b[i] + s c[i] on three float arrays of 64 MiB each (16 Mi elements, far past
 //     the 32 MiB L3), split over the threads by tbb::parallel_for (static partition, the arrays
@@ -70,6 +74,7 @@
 #include "seiche/kernels/integrate.hpp"
 #include "seiche/kernels/particle_contacts.hpp"
 #include "seiche/kernels/pbf_density.hpp"
+#include "seiche/kernels/shape_matching.hpp"
 #include "seiche/kernels/tethers.hpp"
 #include "seiche/kernels/vorticity_confinement.hpp"
 #include "seiche/kernels/xsph_viscosity.hpp"
@@ -507,6 +512,56 @@ void BM_ParticleContacts(benchmark::State& state) {
   report(state, double(s.contacts.partner.size()), "s_per_constraint");
 }
 
+struct ShapeBlock {
+  Particles particles;
+  kernels::ShapeClusters clusters;
+  std::vector<float> rest_x, rest_y, rest_z;
+};
+
+// Block n in lattice order (x fastest), the clusters its 4 x 4 x 4 sub-blocks.
+ShapeBlock make_shape_block(int n) {
+  ShapeBlock s{make_block(n, false), {}, {}, {}, {}};
+  const std::size_t count = s.particles.size();
+  s.rest_x.resize(count), s.rest_y.resize(count), s.rest_z.resize(count);
+  const int cells = n / 4;
+  s.clusters.start.push_back(0);
+  for (int cz = 0; cz < cells; ++cz)
+    for (int cy = 0; cy < cells; ++cy)
+      for (int cx = 0; cx < cells; ++cx) {
+        const std::size_t first = s.clusters.particle.size();
+        for (int k = 0; k < 4; ++k)
+          for (int j = 0; j < 4; ++j)
+            for (int i = 0; i < 4; ++i)
+              s.clusters.particle.push_back(std::uint32_t(((cz * 4 + k) * n + (cy * 4 + j)) * n + (cx * 4 + i)));
+        double c[3] = {0, 0, 0};
+        for (std::size_t m = first; m < s.clusters.particle.size(); ++m) {
+          const std::uint32_t q = s.clusters.particle[m];
+          c[0] += s.particles.x[q], c[1] += s.particles.y[q], c[2] += s.particles.z[q];
+        }
+        for (std::size_t m = first; m < s.clusters.particle.size(); ++m) {
+          const std::uint32_t q = s.clusters.particle[m];
+          s.rest_x[q] = float(s.particles.x[q] - c[0] / 64), s.rest_y[q] = float(s.particles.y[q] - c[1] / 64);
+          s.rest_z[q] = float(s.particles.z[q] - c[2] / 64);
+        }
+        s.clusters.start.push_back(std::uint32_t(s.clusters.particle.size()));
+        s.clusters.stiffness.push_back(1.0f);
+        s.clusters.rotation.push_back(kernels::kIdentityRotation);
+      }
+  return s;
+}
+
+void BM_ShapeMatching(benchmark::State& state) {
+  const auto threads = thread_limit(state);
+  const ShapeBlock& s = cached<make_shape_block>(int(state.range(0)));
+  Particles p = s.particles;
+  kernels::ShapeClusters clusters = s.clusters;
+  const kernels::RestOffsets rest{s.rest_x.data(), s.rest_y.data(), s.rest_z.data()};
+  time_calls_restoring(state, p, s.particles, [&] { kernels::solve_shape_matching(p.view(), rest, clusters); });
+  state.counters["particles"] = double(clusters.particle.size());
+  state.counters["clusters"] = double(clusters.clusters());
+  report(state, double(clusters.particle.size()), "s_per_particle");
+}
+
 // a[i] = b[i] + s c[i] over 64 MiB float arrays (see the top of the file). Args: elements, threads.
 void BM_Triad(benchmark::State& state) {
   const auto threads = thread_limit(state);
@@ -566,6 +621,7 @@ BENCHMARK_TEMPLATE(BM_Fluid, FluidPass::Confinement)
 BENCHMARK(BM_DistanceChains)->Name("DistanceChains")->Apply(block_sizes);
 BENCHMARK(BM_Tethers)->Name("Tethers")->Apply(sheet_sizes);
 BENCHMARK(BM_ParticleContacts)->Name("ParticleContacts")->Apply(sheet_sizes);
+BENCHMARK(BM_ShapeMatching)->Name("ShapeMatching")->Apply(block_sizes);
 BENCHMARK(BM_Triad)->Name("Triad")->Apply(triad_size);
 
 BENCHMARK_MAIN();
