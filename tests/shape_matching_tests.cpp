@@ -139,3 +139,28 @@ TEST(ShapeMatching, CheckpointContinuesBitForBitWithItsRotations) {
 
   fs::remove_all(dir);
 }
+
+TEST(ShapeMatching, BadShapesAreRefusedNamingTheField) {
+  auto message = [](const std::string& shape) {
+    try {
+      load_scene_text(R"({"shapes": [)" + shape + "]}", "bad.json");
+    } catch (const std::exception& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  const std::string thin = message(R"({"box": {"min": [0.1, 0.1, 0.1], "max": [0.5, 0.12, 0.5]}})");
+  EXPECT_NE(thin.find("shapes[0].box"), std::string::npos) << thin;
+  EXPECT_NE(thin.find("holds no particles"), std::string::npos) << thin;
+  const std::string outside = message(R"({"box": {"min": [0.5, 0.5, 0.5], "max": [1.5, 0.9, 0.9]}})");
+  EXPECT_NE(outside.find("outside the domain"), std::string::npos) << outside;
+  const std::string light =
+      message(R"({"box": {"min": [0.1, 0.1, 0.1], "max": [0.2, 0.2, 0.2]}, "spacing": 0.01, "density": 1e-9})");
+  EXPECT_NE(light.find("shapes[0].density"), std::string::npos) << light;
+  const std::string soft = message(R"({"box": {"min": [0.1, 0.1, 0.1], "max": [0.2, 0.2, 0.2]}, "stiffness": 0})");
+  EXPECT_NE(soft.find("shapes[0].stiffness"), std::string::npos) << soft;
+  EXPECT_NE(message(R"({"box": {"min": [0, 0, 0], "max": [0.2, 0.2, 0.2]}, "density": 2e5})").find("density"),
+            std::string::npos);
+  const std::string many = message(R"({"box": {"min": [0, 0, 0], "max": [1, 1, 1]}, "spacing": 0.009})");
+  EXPECT_NE(many.find("the limit is 1000000 per shape"), std::string::npos) << many;
+}

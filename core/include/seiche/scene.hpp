@@ -79,7 +79,7 @@ struct FluidDef {
 struct ShapeDef {
   BoxDef box;                       ///< required; 1 to 1 000 000 particles, inside the domain
   float spacing = 0.05f;            ///< m (> 0); each particle's collision radius is half of it
-  float density = 1000.0f;          ///< kg/m^3 (> 0): each particle weighs density spacing^3
+  float density = 1000.0f;          ///< kg/m^3 in (0, 1e5]: each particle weighs density spacing^3 (>= 1e-12 kg)
   float stiffness = 1.0f;           ///< in (0, 1]: 1 is rigid, less pulls part way each iteration
   Vec3 velocity{0.0f, 0.0f, 0.0f};  ///< m/s, initial velocity of every particle
 };

@@ -23,7 +23,7 @@ ShapeFamily::ShapeFamily(const SceneDef& scene, ParticleStore& store, std::size_
       rest_y_(store.add_column<float>("shape.rest_y", ColumnKind::Constant)),
       rest_z_(store.add_column<float>("shape.rest_z", ColumnKind::Constant)) {
   std::size_t k = first;
-  clusters_.start.push_back(std::uint32_t(k - first));
+  clusters_.start.push_back(0);
   for (std::size_t c = 0; c < scene.shapes.size(); ++c) {
     const ShapeDef& s = scene.shapes[c];
     const float mass = s.density * s.spacing * s.spacing * s.spacing;

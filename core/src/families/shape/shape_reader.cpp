@@ -14,6 +14,11 @@ namespace {
 // One cluster is matched by one thread: past a million particles one shape would stall every
 // iteration (large soft bodies are several overlapping clusters, a later family).
 constexpr std::size_t kMaxParticlesPerShape = 1'000'000;
+// The lightest particle a shape may have: the raw particles' bound ("particles[k].mass"), so
+// that the inverse mass stays a normal float.
+constexpr double kMinParticleMass = 1e-12;
+// Densest solid (osmium, 22.6 t/m^3) with room to spare; above, density * spacing^3 is a typo.
+constexpr double kMaxDensity = 1e5;
 
 const KeyTable<ShapeDef>& shape_keys() {
   using K = Key<ShapeDef>;
@@ -25,7 +30,7 @@ const KeyTable<ShapeDef>& shape_keys() {
       K("spacing", &ShapeDef::spacing, Range::above(0))
           .unit("m")
           .doc("particle spacing; each particle's collision radius is half of it"),
-      K("density", &ShapeDef::density, Range::above(0))
+      K("density", &ShapeDef::density, Range{0, kMaxDensity, true, false})  // (0, 1e5]
           .unit("kg/m³")
           .doc("each particle weighs `density * spacing³`"),
       K("stiffness", &ShapeDef::stiffness, Range{0, 1, true, false})  // (0, 1]
@@ -57,6 +62,11 @@ void check_shapes(SceneDef& scene, const std::string& file) {
     if (count > double(kMaxParticlesPerShape))
       fail(file, box_path, fmt::format("would hold {:.0f} particles at spacing {} m; the limit is {} per shape",
                                        count, s.spacing, kMaxParticlesPerShape));
+    const double mass = double(s.density) * s.spacing * s.spacing * s.spacing;
+    if (mass < kMinParticleMass)
+      fail(file, element_path("shapes", k) + ".density",
+           fmt::format("gives particles of {:.3g} kg (density * spacing^3); the lightest allowed is {:g} kg", mass,
+                       kMinParticleMass));
     if (!inside(s.box.min, scene.domain) || !inside(s.box.max, scene.domain))
       fail(file, box_path, fmt::format("{}..{} reaches outside the domain {}", format_vec(s.box.min),
                                        format_vec(s.box.max), format_domain(scene.domain)));
