@@ -53,7 +53,12 @@ def main():
     fig, ax = plt.subplots(figsize=(8, 5.5), dpi=120)
     times = [float(r["ms_per_frame"]) for r in sweep]
     errors = [max(float(r["error_rms"]), 1e-12) for r in sweep]
-    ax.scatter(times, errors, s=18, color="tab:blue", zorder=3, label="settings")
+    ax.scatter(times, errors, s=18, color="tab:blue", zorder=3, label="settings (median time)")
+    if "ms_per_frame_q1" in fields:  # the spread of the timed runs
+        low = [t - float(r["ms_per_frame_q1"]) for t, r in zip(times, sweep)]
+        high = [float(r["ms_per_frame_q3"]) - t for t, r in zip(times, sweep)]
+        ax.errorbar(times, errors, xerr=[low, high], fmt="none", ecolor="tab:blue", elinewidth=0.8, capsize=2,
+                    zorder=2, label="time quartiles of the timed runs")
     for r, t, e in zip(sweep, times, errors):
         ax.annotate(label_of(r, axes), (t, e), textcoords="offset points", xytext=(4, 3), fontsize=7)
 

@@ -8,7 +8,9 @@
 //   rms = sqrt(sum_f sum_i |x_i(f) - x_ref_i(f)|^2 / (frames particles)) / spacing
 //   max = max_f max_i |x_i(f) - x_ref_i(f)| / spacing
 // next to the constraint errors of the run report and the wall time per frame. The runs that
-// no other run beats in both time and rms error form the Pareto front.
+// no other run beats in both time and rms error form the Pareto front. A setting's time is the
+// median of several runs after a warm-up (BenchRun::ms_per_frame), so that the order of the
+// sweep does not move the front.
 //
 // The reference of a scene made only of cloth (isometric bending) and raw distance constraints,
 // with no colliders and no contacts, is implicit Euler solved to convergence by Newton's method
@@ -68,7 +70,15 @@ struct BenchRun {
   double iterations_run = 0.0;
   int frames = 0;                   ///< frames completed
   bool diverged = false;            ///< a non-finite value appeared; the run stopped there
-  double ms_per_frame = 0.0;        ///< wall time of the simulation, per frame
+  /// Wall time of the simulation per frame: the median of `timed_runs` runs of the setting from
+  /// its initial state, after the measured run above as a warm-up (at least 3 runs and about
+  /// 0.5 s in all; the references and a diverged run: their one run)
+  double ms_per_frame = 0.0;
+  double ms_per_frame_min = 0.0;    ///< the fastest and slowest of those runs
+  double ms_per_frame_max = 0.0;
+  double ms_per_frame_q1 = 0.0;     ///< their quartiles: the spread (one preempted run moves only min/max)
+  double ms_per_frame_q3 = 0.0;
+  int timed_runs = 0;
   double error_rms = 0.0;           ///< against the reference, in spacings (0 for the reference)
   double error_max = 0.0;
   RunErrors constraint_errors;      ///< the run report's errors over the run (empty: not measured)

@@ -114,6 +114,52 @@ BenchRun run_xpbd(const SceneDef& scene, int frames, double spacing, const Traje
   return run;
 }
 
+// A setting's time, what the Pareto front compares. The measured run (run_xpbd) was the warm-up:
+// caches, page faults and the thread pool have settled. Then the setting runs again from its
+// initial state, its frames unmeasured (FrameMeasure::Skip: the simulation alone), at least
+// kMinTimedRuns times and until kMinTimedSeconds are timed in all (at most kMaxTimedRuns); the
+// median is its time, its quartiles the spread (and the fastest and slowest run are kept). A
+// diverged run keeps its one time.
+constexpr int kMinTimedRuns = 3;
+constexpr double kMinTimedSeconds = 0.5;
+constexpr int kMaxTimedRuns = 100;
+
+// The q-quantile of sorted values, linear between neighbours (q = 0.5: the median).
+double quantile(const std::vector<double>& sorted, double q) {
+  const double at = q * double(sorted.size() - 1);
+  const std::size_t below = std::size_t(at);
+  const std::size_t above = std::min(below + 1, sorted.size() - 1);
+  return sorted[below] + (at - double(below)) * (sorted[above] - sorted[below]);
+}
+
+void one_timed_run(BenchRun& run) {
+  run.ms_per_frame_min = run.ms_per_frame_max = run.ms_per_frame;
+  run.ms_per_frame_q1 = run.ms_per_frame_q3 = run.ms_per_frame;
+  run.timed_runs = 1;
+}
+
+void time_setting(const SceneDef& scene, BenchRun& run) {
+  one_timed_run(run);
+  if (run.diverged || run.frames == 0) return;
+  std::vector<double> ms;
+  double total = 0.0;
+  while (int(ms.size()) < kMinTimedRuns || (total < kMinTimedSeconds && int(ms.size()) < kMaxTimedRuns)) {
+    Simulation sim(scene);
+    const auto start = Clock::now();
+    for (int f = 0; f < run.frames; ++f) sim.step_frame(FrameMeasure::Skip);
+    const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    total += seconds;
+    ms.push_back(seconds * 1e3 / run.frames);
+  }
+  std::sort(ms.begin(), ms.end());
+  run.ms_per_frame = quantile(ms, 0.5);
+  run.ms_per_frame_q1 = quantile(ms, 0.25);
+  run.ms_per_frame_q3 = quantile(ms, 0.75);
+  run.ms_per_frame_min = ms.front();
+  run.ms_per_frame_max = ms.back();
+  run.timed_runs = int(ms.size());
+}
+
 // The implicit-Euler reference: `substeps` steps per frame, each solved by Newton's method.
 // Counts the steps whose Newton solve stopped before its tolerance in `unconverged`.
 BenchRun run_implicit(const SceneDef& scene, int substeps, int frames, double spacing,
@@ -282,6 +328,9 @@ BenchResult run_bench_on_threads(const SceneFactory& load_scene, const BenchOpti
     if (!options.progress) return;
     fmt::print(*options.progress, "bench: run {}/{} ({}): {:.2f} ms/frame", runs_done, total_runs, what,
                r.ms_per_frame);
+    if (r.timed_runs > 1)
+      fmt::print(*options.progress, " (median of {}, quartiles {:.2f}-{:.2f})", r.timed_runs, r.ms_per_frame_q1,
+                 r.ms_per_frame_q3);
     if (r.diverged) fmt::print(*options.progress, ", diverged after {} frames", r.frames);
     else if (r.role != BenchRun::Role::Reference) fmt::print(*options.progress, ", rms error {:.3g}", r.error_rms);
     fmt::print(*options.progress, "\n");
@@ -318,6 +367,7 @@ BenchResult run_bench_on_threads(const SceneFactory& load_scene, const BenchOpti
     report(check, check_what);
   }
   check.role = BenchRun::Role::ReferenceCheck;
+  for (BenchRun* r : {&ref, &check}) one_timed_run(*r);  // one run each: their time is not compared
   result.reference =
       implicit ? fmt::format("implicit Euler, {} steps per frame, each solved by Newton's method to 1e-12 m{}",
                              ref_substeps,
@@ -327,6 +377,7 @@ BenchResult run_bench_on_threads(const SceneFactory& load_scene, const BenchOpti
   for (std::size_t k = 0; k < settings.size(); ++k) {
     const std::string what = fmt::format("{}", fmt::join(overrides_of(axes, settings[k]), ", "));
     BenchRun run = run_xpbd(scenes[k], result.frames, result.spacing, &reference, nullptr, options.progress, label(what));
+    time_setting(scenes[k], run);
     run.values = settings[k];
     report(run, what);
     result.runs.push_back(std::move(run));
@@ -362,16 +413,18 @@ std::string bench_csv(const BenchResult& result) {
   const RunErrors rows = rows_of_any_run(result);
   std::string csv = "role";
   for (const std::string& key : result.axes) csv += "," + key;
-  csv += ",substeps,iterations,iterations_run,frames,diverged,ms_per_frame,error_rms,error_max,spacing_m";
+  csv += ",substeps,iterations,iterations_run,frames,diverged,ms_per_frame,ms_per_frame_q1,ms_per_frame_q3,"
+         "ms_per_frame_min,ms_per_frame_max,timed_runs,error_rms,error_max,spacing_m";
   for (const ErrorRow& e : rows) csv += "," + e.key + "_mean," + e.key + "_max";
   csv += ",pareto\n";
   for (const BenchRun& r : result.runs) {
     csv += r.role == BenchRun::Role::Sweep ? "sweep" : r.role == BenchRun::Role::Reference ? "reference" : "reference_check";
     for (std::size_t a = 0; a < result.axes.size(); ++a) csv += "," + (a < r.values.size() ? r.values[a] : "");
-    csv += fmt::format(",{},{},{},{},{},{},{},{},{}", r.substeps, r.iterations, format_value(r.iterations_run),
-                       r.frames, r.diverged ? 1 : 0,
-                       format_value(r.ms_per_frame), format_value(r.error_rms), format_value(r.error_max),
-                       format_value(result.spacing));
+    csv += fmt::format(",{},{},{},{},{},{},{},{},{},{},{},{},{},{}", r.substeps, r.iterations,
+                       format_value(r.iterations_run), r.frames, r.diverged ? 1 : 0, format_value(r.ms_per_frame),
+                       format_value(r.ms_per_frame_q1), format_value(r.ms_per_frame_q3),
+                       format_value(r.ms_per_frame_min), format_value(r.ms_per_frame_max), r.timed_runs,
+                       format_value(r.error_rms), format_value(r.error_max), format_value(result.spacing));
     for (const ErrorRow& row : rows) {
       const ErrorRow* e = find_error(r.constraint_errors, row.key);
       csv += e ? fmt::format(",{},{}", format_value(e->mean), format_value(e->max)) : std::string(",,");
@@ -401,7 +454,7 @@ void print_bench_table(std::ostream& out, const BenchResult& result) {
     return r.iterations > 0 && r.iterations_run > r.iterations + 1e-9;
   });
   if (adaptive) header.push_back("iterations run");
-  for (const char* h : {"ms/frame", "rms error", "max error"}) header.push_back(h);
+  for (const char* h : {"ms/frame", "quartiles", "rms error", "max error"}) header.push_back(h);
   for (const ErrorRow& e : rows) header.push_back(e.label + " mean/max");
   header.push_back("pareto");
   std::vector<std::size_t> width;
@@ -418,6 +471,7 @@ void print_bench_table(std::ostream& out, const BenchResult& result) {
     std::vector<std::string> cells = r.values;
     if (adaptive) cells.push_back(fmt::format("{:.2f}", r.iterations_run));
     cells.push_back(fmt::format("{:.2f}", r.ms_per_frame));
+    cells.push_back(r.timed_runs > 1 ? fmt::format("{:.2f}-{:.2f}", r.ms_per_frame_q1, r.ms_per_frame_q3) : "-");
     cells.push_back(r.diverged ? "diverged" : fmt::format("{:.3g}", r.error_rms));
     cells.push_back(r.diverged ? fmt::format("at frame {}", r.frames + 1) : fmt::format("{:.3g}", r.error_max));
     for (const ErrorRow& row : rows) {
