@@ -16,6 +16,7 @@
 
 #include "loop/iteration_record.hpp"
 #include "run/background_writer.hpp"
+#include "run/progress.hpp"
 #include "seiche/output_files.hpp"
 #include "seiche/particle_store.hpp"
 #include "seiche/runner.hpp"
@@ -387,4 +388,16 @@ TEST(OutputFiles, BackgroundWriterWritesEveryFileInOrderAndStopsAtTheFirstFailur
 TEST(OutputFiles, UnwritableFolderIsAnIoError) {
   EXPECT_THROW(prepare_output_directory("/dev/null/seiche"), IoError);
   EXPECT_THROW(write_file_atomically("/nonexistent-dir/x.ply", "data"), IoError);
+}
+
+// The progress line: plain in logs; on a terminal a bar in front, cut to the terminal's width.
+TEST(Progress, TerminalLineHasABarAndFitsTheWidth) {
+  const std::string plain = progress_line(5, 20, "1000 particles  2.0 ms/frame", 3.0, "  1.2 MB written");
+  EXPECT_EQ(plain, "frame 5/20  1000 particles  2.0 ms/frame  ETA 3.0 s  1.2 MB written");
+  EXPECT_EQ(terminal_progress_line(plain, 5, 20, 20, 200), "[#####---------------] " + plain);
+  EXPECT_EQ(terminal_progress_line(plain, 20, 20, 20, 200).substr(0, 22), "[####################]");
+  EXPECT_EQ(terminal_progress_line(plain, 5, 20, 8, 200), "[##------] " + plain);
+  EXPECT_EQ(terminal_progress_line(plain, 5, 20, 4, 200), plain);  // too short a bar: none
+  // Never the full width: a full line wraps on some terminals and cannot be rewritten in place.
+  EXPECT_EQ(terminal_progress_line(plain, 5, 20, 0, 40), plain.substr(0, 39));
 }

@@ -2,13 +2,46 @@
 
 #include <fmt/format.h>
 #include <fmt/ostream.h>
+#include <sys/ioctl.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 
 #include "seiche/kernels/simd_info.hpp"
 
 namespace seiche {
+
+namespace {
+
+// The terminal's width in columns (stderr's), or 80 when it does not say.
+int terminal_width() {
+  winsize size{};
+  if (::ioctl(2, TIOCGWINSZ, &size) == 0 && size.ws_col > 0) return size.ws_col;
+  return 80;
+}
+
+}  // namespace
+
+std::string progress_line(int frame, int last_frame, std::string_view details, double eta_seconds,
+                          std::string_view trailer) {
+  return fmt::format("frame {}/{}  {}  ETA {:.1f} s{}", frame, last_frame, details, eta_seconds, trailer);
+}
+
+std::string terminal_progress_line(const std::string& line, int frame, int last_frame, int bar_cells, int width) {
+  std::string out = line;
+  if (bar_cells >= kMinProgressBar) {
+    const double share = last_frame > 0 ? std::clamp(double(frame) / last_frame, 0.0, 1.0) : 1.0;
+    const int done = int(std::lround(bar_cells * share));
+    out = fmt::format("[{}{}] {}", std::string(std::size_t(done), '#'), std::string(std::size_t(bar_cells - done), '-'),
+                      line);
+  }
+  // One column short of the width: a line that fills it wraps on some terminals, and a wrapped
+  // line cannot be rewritten in place.
+  const std::size_t fits = std::size_t(std::max(width - 1, 1));
+  if (out.size() > fits) out.resize(fits);
+  return out;
+}
 
 Progress::Progress(std::ostream* out, int last_frame)
     : out_(out), last_frame_(last_frame), tty_(out && ::isatty(2)) {}
@@ -20,9 +53,13 @@ void Progress::frame_done(int frame, double elapsed, int session_frames, std::st
   if (!tty_ && !last && session_frames != 1 && elapsed - last_print_ < 1.0) return;
   last_print_ = elapsed;
   const double eta = elapsed / std::max(session_frames, 1) * (last_frame_ - frame);
-  const std::string line =
-      fmt::format("frame {}/{}  {}  ETA {:.1f} s{}", frame, last_frame_, details, eta, trailer);
+  std::string line = progress_line(frame, last_frame_, details, eta, trailer);
   if (tty_) {
+    // The bar takes what the line leaves of the width, and only ever shrinks, so that it does
+    // not jump as the numbers change length; below kMinProgressBar cells it goes.
+    const int width = terminal_width();
+    bar_cells_ = std::min(bar_cells_, std::max(width - 1 - int(line.size()) - 3, 0));  // "[", "] "
+    line = terminal_progress_line(line, frame, last_frame_, bar_cells_, width);
     *out_ << "\r" << line << "\x1b[K" << (last ? "\n" : "") << std::flush;
     line_open_ = !last;
   } else {

@@ -1,6 +1,7 @@
 // What `seiche run` and `seiche bake` tell the user: a progress line while frames are stepped
-// (rewritten in place on a terminal, throttled to about one a second in logs, where every line
-// stays), and the summary at the end (settings, the pass table, the error of each family).
+// (on a terminal one line rewritten in place, with a bar, cut to the terminal's width; in logs
+// plain lines, throttled to about one a second, where every line stays), and the summary at the
+// end (settings, the pass table, the error of each family).
 #pragma once
 
 #include <cstdint>
@@ -13,6 +14,8 @@
 #include "seiche/scene.hpp"
 
 namespace seiche {
+
+inline constexpr int kProgressBarWidth = 20, kMinProgressBar = 5;
 
 class Progress {
  public:
@@ -32,8 +35,16 @@ class Progress {
   int last_frame_;
   bool tty_;
   bool line_open_ = false;
+  int bar_cells_ = kProgressBarWidth;  // shrinks to what the terminal leaves, never grows back
   double last_print_ = -1.0;
 };
+
+/// The progress line: "frame k/N  <details>  ETA s<trailer>" (what a log gets).
+std::string progress_line(int frame, int last_frame, std::string_view details, double eta_seconds,
+                          std::string_view trailer);
+/// On a terminal `width` columns wide: a bar of `bar_cells` cells in front (none below
+/// kMinProgressBar) and the whole cut one column short of the width.
+std::string terminal_progress_line(const std::string& line, int frame, int last_frame, int bar_cells, int width);
 
 /// Effective settings, pass table (total and per frame) and the error of each active family.
 void print_run_summary(std::ostream& out, const SceneDef& scene, const RunResult& result,

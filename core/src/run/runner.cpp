@@ -67,27 +67,32 @@ RunResult run_on_threads(const SceneDef& scene, const RunOptions& options, int t
   for (const auto& e : exporters) files_per_frame += e->files(1).size();
   BackgroundWriter frame_files(files_per_frame);
   const auto start = Clock::now();
+  std::uint64_t bytes_submitted = 0, bytes_on_disk = 0;
+  auto submit = [&](const std::filesystem::path& file, std::string bytes) {
+    bytes_submitted += bytes.size();
+    frame_files.submit(file, std::move(bytes));
+  };
   try {
     for (int f = 1; f <= frames; ++f) {
       const auto frame_start = Clock::now();
       FrameMetrics m = sim.step_frame();
       frame_files.finish();  // frame f - 1's files are on disk, or their failure is thrown here
+      bytes_on_disk = bytes_submitted;
       report.add_frame(m, sim.timer());
       result.metrics.push_back(m);
       throw_if_diverged(m, f);
       if (!options.out_dir.empty()) {
-        frame_files.submit(options.out_dir / frame_file_name("particles", f, "ply"),
-                           encode_particles_ply(sim.particles()));
+        submit(options.out_dir / frame_file_name("particles", f, "ply"), encode_particles_ply(sim.particles()));
         for (const auto& e : exporters)
           for (FrameExporter::EncodedFile& file : e->encode_frame({sim.particles(), scene, f, sim.time()}))
-            frame_files.submit(options.out_dir / file.name, std::move(file.bytes));
+            submit(options.out_dir / file.name, std::move(file.bytes));
       }
       result.frames = f;
       const std::chrono::duration<double> elapsed = Clock::now() - start;
       const std::chrono::duration<double> frame_time = Clock::now() - frame_start;
       progress.frame_done(
-          f, elapsed.count(), f,
-          fmt::format("{} particles  {:.1f} ms/frame", result.particles, frame_time.count() * 1e3));
+          f, elapsed.count(), f, fmt::format("{} particles  {:.1f} ms/frame", result.particles, frame_time.count() * 1e3),
+          options.out_dir.empty() ? std::string() : fmt::format("  {} written", format_bytes(bytes_on_disk)));
     }
     frame_files.finish();  // the last frames are on disk (or their failure is thrown) here
   } catch (const std::exception& e) {
