@@ -579,6 +579,131 @@ TEST(CliCloth, NonManifoldObjIsBadInput) {
   EXPECT_NE(r.err.find("non-manifold"), std::string::npos) << r.err;
 }
 
+// ---- names and output locations ----------------------------------------------------------------
+
+namespace {
+
+// Two small sheets (names given by the test) and a block of fluid: 2 frames take milliseconds.
+std::string named_scene(const std::string& first_cloth, const std::string& second_cloth) {
+  return R"({ "name": "named", "domain": { "min": [-1,0,-1], "max": [1,1.5,1] },
+  "output": { "frames": 2, "vdb": [] },
+  "fluids": [ { "box": { "min": [-1,0,-1], "max": [-0.8,0.2,-0.8] }, "spacing": 0.05 } ],
+  "cloths": [ { "name": ")" + first_cloth + R"(", "sheet": { "origin": [-0.3,0.9,-0.3], "size": [0.6,0.6], "resolution": [4,4] } },
+              { "name": ")" + second_cloth + R"(", "sheet": { "origin": [-0.3,1.1,-0.3], "size": [0.6,0.6], "resolution": [4,4] } } ] })";
+}
+
+// Every file under `dir` (recursively), for "nothing was written" checks.
+std::vector<std::string> files_under(const fs::path& dir) {
+  std::vector<std::string> files;
+  std::error_code ec;
+  for (const auto& e : fs::recursive_directory_iterator(dir, ec))
+    if (!e.is_directory()) files.push_back(e.path().string());
+  return files;
+}
+
+}  // namespace
+
+TEST(CliNames, NamesThatWouldWriteOutsideTheFolderAreBadInputAndWriteNothing) {
+  // Each case: the cloth names (or an override), and what the message must say. A scene is data
+  // from others: none of these may write a file, inside the output folder or outside it.
+  const fs::path land = fresh_dir("names_land");  // where the escaping names point
+  fs::create_directories(land / "out");
+  const std::string absolute = (land / "abs").string();
+  const struct {
+    std::string first, second, set, path, problem;
+  } cases[] = {
+      {absolute, "b", "", "cloths[0].name", "contains '/', a path separator, at character 1"},
+      {"../escape", "b", "", "cloths[0].name", "contains '/'"},
+      {"a/b", "b", "", "cloths[0].name", "contains '/', a path separator, at character 2"},
+      {"c", "./c", "", "cloths[1].name", "contains '/'"},
+      {"c", "C", "", "cloths[1].name", "\"C\" writes the same files as cloths[0].name (\"c\")"},
+      {"a\\nb", "b", "", "cloths[0].name", "contains a newline at character 2"},
+      {std::string(300, 'n'), "b", "", "cloths[0].name", "is 300 characters long, more than 64"},
+      {"a", "b", "name=../esc", "name", "contains '/', a path separator, at character 3"},
+      {"a", "b", "name=a/b", "name", "contains '/'"},
+      {"a", "b", "cloths.1.name=" + absolute, "cloths[1].name", "contains '/'"},
+  };
+  int k = 0;
+  for (const auto& c : cases) {
+    const fs::path scene = write_scene("named_" + std::to_string(k++) + ".json", named_scene(c.first, c.second));
+    const fs::path out = land / "out" / "frames";
+    const std::string set = c.set.empty() ? "" : " --set " + q(c.set);
+    for (const std::string command : {"run", "bake"}) {
+      const Result r = seiche(command + " " + q(scene) + " --out " + q(out) + set);
+      EXPECT_EQ(r.code, 2) << command << " " << c.first << " " << c.second << c.set << ": " << r.err;
+      for (const std::string& s : {scene.string(), c.path + ": ", c.problem})
+        EXPECT_NE(r.err.find(s), std::string::npos) << command << ": '" << s << "' missing from: " << r.err;
+      EXPECT_EQ(r.err.find("frame 1/"), std::string::npos) << "simulated a scene with a bad name: " << r.err;
+      EXPECT_EQ(files_under(land), std::vector<std::string>{}) << command << " " << c.first << c.set;
+    }
+  }
+  // The defaults out/<name> follow the name: `--set name=../esc` without --out writes nothing
+  // either (run from inside `land`, whose parent would receive ../esc).
+  const fs::path scene = write_scene("named_ok.json", named_scene("a", "b"));
+  const Result r = seiche("run " + q(scene) + " --set name=../esc", "cd " + q(land / "out") + " &&");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_EQ(files_under(land), std::vector<std::string>{});
+  EXPECT_FALSE(fs::exists(land / "esc"));
+  // Within the rule, the names are the files.
+  const fs::path good = fresh_dir("names_good");
+  const Result ok = seiche("run " + q(scene) + " --out " + q(good) + " --set cloths.0.name=Sail-2.v1");
+  ASSERT_EQ(ok.code, 0) << ok.err;
+  for (const char* f : {"Sail-2.v1.0001.obj", "b.0002.obj", "particles.0002.ply"})
+    EXPECT_TRUE(fs::exists(good / f)) << f;
+}
+
+TEST(CliNames, UnwritableReportFailsBeforeSimulatingAndWritesNoFrame) {
+  const fs::path scene = write_scene("report_scene.json", named_scene("a", "b"));
+  const fs::path taken = fresh_dir("report_is_a_folder");
+  fs::create_directories(taken);
+  for (const std::string report : {std::string("/proc/seiche_report.json"), std::string("."), taken.string(),
+                                   taken.string() + "/"}) {
+    const fs::path out = fresh_dir("report_out");
+    const Result r = seiche("run " + q(scene) + " --frames 2 --out " + q(out) + " --report " + q(report));
+    EXPECT_EQ(r.code, 3) << report << ": " << r.err;
+    EXPECT_NE(r.err.find(report), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find("frame 1/"), std::string::npos) << report << ": simulated before checking: " << r.err;
+    EXPECT_EQ(files_under(out), std::vector<std::string>{}) << report;
+    EXPECT_EQ(files_under(taken), std::vector<std::string>{}) << report;
+  }
+  EXPECT_FALSE(fs::exists("/proc/seiche_report.json"));
+  // A bake's report and checkpoint: a folder in the way of either is found before frame 1.
+  for (const char* in_the_way : {"report.json", "checkpoint.bin"}) {
+    const fs::path dir = fresh_dir("bake_blocked");
+    fs::create_directories(dir / in_the_way / "x");
+    const Result r = seiche("bake " + q(scene) + " --out " + q(dir));
+    EXPECT_EQ(r.code, 3) << in_the_way << ": " << r.err;
+    EXPECT_NE(r.err.find((dir / in_the_way).string()), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find("frame 1/"), std::string::npos) << in_the_way << ": simulated before checking: " << r.err;
+    EXPECT_EQ(files_under(dir), std::vector<std::string>{}) << in_the_way;  // the folder x only
+  }
+}
+
+TEST(CliBake, ShorterRebakeIntoAUsedFolderLeavesNoFrameOfTheEarlierBake) {
+  const fs::path dir = fresh_dir("bake_rebake");
+  const fs::path scene = write_scene("rebake.json", named_scene("sail", "flag"));
+  ASSERT_EQ(seiche("bake " + q(scene) + " --frames 6 --out " + q(dir)).code, 0);
+  // Frames 1 and 4-6 (a PLY and two OBJs each) lie outside the new range 2-3.
+  std::ofstream(dir / "notes.0005.txt") << "not a frame of the bake";
+  std::ofstream(dir / "other.0005.obj") << "not a file this bake writes";
+  const Result r = seiche("bake " + q(scene) + " --frames 2-3 --out " + q(dir));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("removed 12 frame files of the earlier bake"), std::string::npos) << r.err;
+  std::vector<std::string> frames;
+  for (const auto& e : fs::directory_iterator(dir))
+    if (e.path().extension() == ".ply" || e.path().extension() == ".obj") frames.push_back(e.path().filename());
+  std::sort(frames.begin(), frames.end());
+  EXPECT_EQ(frames, (std::vector<std::string>{"flag.0002.obj", "flag.0003.obj", "other.0005.obj", "particles.0002.ply",
+                                              "particles.0003.ply", "sail.0002.obj", "sail.0003.obj"}));
+  EXPECT_TRUE(fs::exists(dir / "notes.0005.txt"));
+  // What is left is the new bake, the same as a bake into an empty folder.
+  const fs::path clean = fresh_dir("bake_rebake_clean");
+  ASSERT_EQ(seiche("bake " + q(scene) + " --frames 2-3 --out " + q(clean)).code, 0);
+  fs::remove(dir / "notes.0005.txt");
+  fs::remove(dir / "other.0005.obj");
+  expect_same_files(clean, dir);
+}
+
 // ---- bench ---------------------------------------------------------------------------------------
 
 namespace {

@@ -15,6 +15,7 @@
 #include "seiche/kernels/simd_info.hpp"
 #include "seiche/checkpoint.hpp"
 #include "seiche/output_files.hpp"
+#include "seiche/runner.hpp"
 #include "seiche/scene_loader.hpp"
 #include "seiche/simulation.hpp"
 
@@ -629,4 +630,100 @@ TEST(Bake, UnwritableFolderFailsBeforeSimulating) {
       bake_scene(mixed_scene(), mixed_recipe(1, 3), quiet_options("/dev/null/seiche", {&exporter})),
       IoError);
   EXPECT_TRUE(exporter.frames.empty());
+}
+
+// ---- Output locations and an earlier bake in the folder ---------------------------------------
+
+// An exporter whose file names leave the folder, as a cloth named "../x" would have before the
+// names were checked at load.
+class EscapingExporter : public RecordingExporter {
+ public:
+  explicit EscapingExporter(std::string stem) : stem_(std::move(stem)) {}
+  std::vector<fs::path> files(int frame) const override { return {frame_file_name(stem_, frame, "txt")}; }
+
+ private:
+  std::string stem_;
+};
+
+TEST(Bake, AFileNameOutsideTheFolderFailsBeforeAnythingIsWritten) {
+  const fs::path parent = fresh_dir("escape");
+  for (const std::string& stem : {std::string("../escaped"), (parent / "absolute").string(), std::string("sub/dir")}) {
+    const fs::path dir = parent / "out";
+    EscapingExporter exporter(stem);
+    try {
+      bake_scene(mixed_scene(), mixed_recipe(1, 2), quiet_options(dir, {&exporter}));
+      ADD_FAILURE() << stem << ": accepted";
+    } catch (const IoError& e) {
+      EXPECT_NE(std::string(e.what()).find("is not a plain file name inside the folder"), std::string::npos)
+          << e.what();
+    }
+    EXPECT_TRUE(exporter.frames.empty()) << stem;
+    EXPECT_FALSE(fs::exists(dir)) << stem << ": the folder was made";
+    EXPECT_EQ(std::distance(fs::directory_iterator(parent), fs::directory_iterator()), 0) << stem;
+  }
+  // seiche run checks its exporters the same way (a cloth name set in code, past the loader).
+  SceneDef cloth = load_scene_text(kClothScene, "hanging.json");
+  cloth.cloths[0].name = "../escaped";
+  RunOptions o;
+  o.out_dir = parent / "run";
+  o.frames = 1;
+  EXPECT_THROW(run_scene(cloth, o), IoError);
+  EXPECT_EQ(std::distance(fs::directory_iterator(parent), fs::directory_iterator()), 0);
+}
+
+TEST(Bake, OutputFileChecksRefuseFoldersAndUncreatableFiles) {
+  const fs::path dir = fresh_dir("writable");
+  EXPECT_NO_THROW(check_output_file_writable(dir / "new" / "report.json"));
+  EXPECT_TRUE(fs::is_directory(dir / "new"));            // its folder is made, as the writer would
+  EXPECT_FALSE(fs::exists(dir / "new" / "report.json"));  // but no file is left
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir / "new"), fs::directory_iterator()), 0);
+  for (const fs::path& bad : {dir, dir / "", fs::path("."), fs::path("/proc/seiche.json"),
+                              fs::path("/dev/null/x.json")})
+    EXPECT_THROW(check_output_file_writable(bad), IoError) << bad;
+  EXPECT_THROW(prepare_output_directory("/proc"), IoError);
+  EXPECT_NO_THROW(check_file_name_inside(dir, "sail.0001.obj"));
+  EXPECT_NO_THROW(check_file_name_inside(dir, "a..0001.obj"));
+  for (const char* bad : {"", ".", "..", "../x.obj", "/x.obj", "a/b.obj"})
+    EXPECT_THROW(check_file_name_inside(dir, bad), IoError) << bad;
+}
+
+TEST(Bake, ANewBakeRemovesTheEarlierBakesFramesOutsideItsRangeAndNothingElse) {
+  const SceneDef scene = mixed_scene();
+  const fs::path dir = fresh_dir("rebake"), clean = fresh_dir("rebake_clean");
+  RecordingExporter first;
+  bake_scene(scene, mixed_recipe(1, 6), quiet_options(dir, {&first}));
+  write_bytes(dir / "particles.0005.ply.bak", "a user's copy");
+  write_bytes(dir / "render.0005.png", "a render");
+  write_bytes(dir / "particles.0007.ply", "past the earlier bake's range: not provably its frame");
+  RecordingExporter second;
+  std::ostringstream progress;
+  BakeOptions o = quiet_options(dir, {&second});
+  o.progress = &progress;
+  bake_scene(scene, mixed_recipe(3, 4), o);
+  EXPECT_NE(progress.str().find("removed 8 frame files of the earlier bake"), std::string::npos) << progress.str();
+  for (int f = 1; f <= 6; ++f) {
+    EXPECT_EQ(fs::exists(dir / frame_file_name("particles", f, "ply")), f == 3 || f == 4) << f;
+    EXPECT_EQ(fs::exists(dir / frame_file_name("record", f, "txt")), f == 3 || f == 4) << f;
+  }
+  for (const char* kept : {"particles.0005.ply.bak", "render.0005.png", "particles.0007.ply"})
+    EXPECT_TRUE(fs::exists(dir / kept)) << kept;
+  for (const char* kept : {"particles.0005.ply.bak", "render.0005.png", "particles.0007.ply"}) fs::remove(dir / kept);
+  RecordingExporter third;
+  bake_scene(scene, mixed_recipe(3, 4), quiet_options(clean, {&third}));
+  EXPECT_EQ(frame_files(dir), frame_files(clean));
+
+  // A resume is the same bake: nothing is removed. A bake.json that records no range removes
+  // nothing either, and says so.
+  bake_scene(scene, mixed_recipe(1, 6), quiet_options(dir));
+  BakeOptions resume = quiet_options(dir);
+  resume.resume = true;
+  write_bytes(dir / "particles.0009.ply", "kept");
+  EXPECT_EQ(bake_scene(scene, mixed_recipe(1, 6), resume).status, BakeResult::Status::AlreadyComplete);
+  write_bytes(dir / kBakeRecipeFile, R"({"first_frame": 1, "last_frame": 2.5})");
+  std::ostringstream warned;
+  o = quiet_options(dir);
+  o.progress = &warned;
+  bake_scene(scene, mixed_recipe(1, 2), o);
+  EXPECT_NE(warned.str().find("records no valid frame range"), std::string::npos) << warned.str();
+  for (int f = 1; f <= 6; ++f) EXPECT_TRUE(fs::exists(dir / frame_file_name("particles", f, "ply"))) << f;
 }

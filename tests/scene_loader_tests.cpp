@@ -350,6 +350,111 @@ TEST(SceneLoader, NameComesFromTheDocumentOrFileStem) {
   EXPECT_EQ(load_scene_file(dir.write("other.json", R"({"name": "given"})")).name, "given");
 }
 
+// A name is one plain file-name part (scene/output_name.hpp): the portable character set, 1 to 64
+// characters, not starting with '.' or '-'.
+TEST(SceneLoader, NamesWithinTheRuleAreAccepted) {
+  const std::string longest(64, 'n');
+  EXPECT_EQ(load(R"({"name": ")" + longest + R"("})").name, longest);
+  EXPECT_EQ(load(R"({"name": "Shot_12-v2.final"})").name, "Shot_12-v2.final");
+  EXPECT_EQ(load(R"({"name": "a.."})").name, "a..");
+}
+
+TEST(SceneLoader, NamesThatWouldLeaveTheOutputFolderOrBreakListingsAreRefused) {
+  const struct {
+    std::string name, problem;
+  } cases[] = {
+      {"/tmp/x", "contains '/', a path separator, at character 1"},
+      {"../escape", "contains '/', a path separator, at character 3"},
+      {"a/b", "contains '/', a path separator, at character 2"},
+      {"./c", "contains '/'"},
+      {"a\\\\b", "contains '\\', a path separator,"},
+      {"..", "\"..\" is a folder, not a name"},
+      {".", "\".\" is a folder, not a name"},
+      {".hidden", "starts with '.'"},
+      {"-rf", "starts with '-'"},
+      {"a\\nb", "contains a newline at character 2"},
+      {"tab\\there", "contains byte 0x09 at character 4"},
+      {"two words", "contains a space at character 4"},
+      {"caf\u00e9", "contains byte 0xc3 at character 4"},
+      {std::string(65, 'n'), "is 65 characters long, more than 64"},
+      {std::string(300, 'n'), "is 300 characters long, more than 64"},
+      {"", "must not be empty"},
+  };
+  for (const auto& c : cases) {
+    const auto e = load_error(R"({"name": ")" + c.name + R"("})");
+    ASSERT_TRUE(e.has_value()) << c.name;
+    EXPECT_EQ(e->json_path(), "name") << c.name;
+    EXPECT_EQ(e->file(), kSource);
+    EXPECT_NE(e->problem().find(c.problem), std::string::npos) << c.name << ": " << e->problem();
+    EXPECT_NE(e->problem().find("it names output files"), std::string::npos) << e->problem();
+    EXPECT_EQ(e->problem().find('\n'), std::string::npos) << "a message is one line: " << e->problem();
+    // The same name through --set (quoted: a JSON string, with the same escapes) is the same error.
+    const std::string override_text = "name=\"" + c.name + "\"";
+    const auto o = load_error("{}", {override_text});
+    ASSERT_TRUE(o.has_value()) << c.name;
+    EXPECT_EQ(o->json_path(), "name");
+    EXPECT_NE(o->problem().find(c.problem), std::string::npos) << c.name << ": " << o->problem();
+  }
+}
+
+TEST(SceneLoader, AFileStemThatIsNoNameNeedsANameInTheScene) {
+  const TempDir dir;
+  const auto bad = [&](const char* file, const char* text) -> std::optional<SceneError> {
+    try {
+      load_scene_file(dir.write(file, text));
+    } catch (const SceneError& e) {
+      return e;
+    }
+    return std::nullopt;
+  };
+  const auto e = bad("shot 12.json", "{}");
+  ASSERT_TRUE(e.has_value());
+  EXPECT_EQ(e->json_path(), "name");
+  EXPECT_NE(e->problem().find("its default, the file's stem, contains a space"), std::string::npos) << e->problem();
+  EXPECT_NE(e->problem().find("set \"name\" in the scene or --set name="), std::string::npos) << e->problem();
+  EXPECT_FALSE(bad(".hidden.json", "{}")->problem().empty());
+  EXPECT_FALSE(bad("shot 12b.json", R"({"name": "shot_12"})").has_value());
+}
+
+// A cloth's name names its OBJ frames: the same rule, and no two names that write the same
+// files, compared ignoring case (case-folding file systems); the message names both.
+TEST(SceneLoader, ClothNamesFollowTheRuleAndWriteDistinctFiles) {
+  const auto cloths = [](const std::string& a, const std::string& b, const std::string& extra = "") {
+    const std::string sheet = R"("sheet": {"origin": [0.1, 0.5, 0.1], "size": [0.2, 0.2], "resolution": [3, 3]})";
+    return R"({"name": "scene1", )" + extra + R"("cloths": [{"name": ")" + a + R"(", )" + sheet +
+           R"(}, {"name": ")" + b + R"(", )" + sheet + "}]}";
+  };
+  EXPECT_EQ(load(cloths("sail", "flag")).cloths[1].name, "flag");
+  struct Case {
+    std::string json, path, problem;
+  };
+  const Case cases[] = {
+      {cloths("/tmp/x", "b"), "cloths[0].name", "contains '/', a path separator, at character 1"},
+      {cloths("a", "../escape"), "cloths[1].name", "contains '/'"},
+      {cloths("c", "./c"), "cloths[1].name", "contains '/'"},
+      {cloths("a", std::string(300, 'x')), "cloths[1].name", "is 300 characters long"},
+      {cloths("a\\nb", "b"), "cloths[0].name", "contains a newline"},
+      {cloths("sail", "Sail"), "cloths[1].name",
+       "\"Sail\" writes the same files as cloths[0].name (\"sail\") (output names are compared ignoring case"},
+      {cloths("c", "c"), "cloths[1].name", "\"c\" writes the same files as cloths[0].name (\"c\")"},
+      {cloths("PARTICLES", "b"), "cloths[0].name", "writes the same files as the particle files"},
+      {cloths("a", "Scene1", R"("fluids": [{"box": {"min": [0, 0, 0], "max": [0.5, 0.5, 0.5]}}], )"), "cloths[1].name",
+       "writes the same files as name (\"scene1\", the scene's name"},
+  };
+  for (const Case& c : cases) {
+    const auto e = load_error(c.json);
+    ASSERT_TRUE(e.has_value()) << c.json;
+    EXPECT_EQ(e->json_path(), c.path) << e->what();
+    EXPECT_NE(e->problem().find(c.problem), std::string::npos) << e->problem();
+  }
+  // Without fluid the scene's name writes no frame files: a cloth may share it.
+  EXPECT_EQ(load(cloths("scene1", "b")).cloths[0].name, "scene1");
+  const std::string rename = "cloths.1.name=../esc";
+  const auto o = load_error(cloths("a", "b"), {rename});
+  ASSERT_TRUE(o.has_value());
+  EXPECT_EQ(o->json_path(), "cloths[1].name");
+}
+
 // ---- Bad input: every case names the exact path ----------------------------------------------
 
 struct BadCase {
@@ -640,7 +745,10 @@ TEST(SceneLoaderOverrides, ValuesAreJsonOrPlainStrings) {
   EXPECT_EQ(s.solver.gravity, (Vec3{0.0f, -1.5f, 0.0f}));
   EXPECT_EQ(s.solver.frame_dt, 0.01);
   EXPECT_EQ(load("{}", {R"(name="42")"}).name, "42");
-  EXPECT_EQ(load("{}", {"name=a=b"}).name, "a=b");  // only the first '=' separates
+  // Only the first '=' separates: the value is "a=b" (no name may hold a '=', so it is refused).
+  const auto e = load_error("{}", {"name=a=b"});
+  ASSERT_TRUE(e.has_value());
+  EXPECT_NE(e->problem().find("contains '=' at character 2"), std::string::npos) << e->problem();
 }
 
 TEST(SceneLoaderOverrides, LaterOverridesWinAndReplaceFileValues) {

@@ -102,8 +102,10 @@ struct BakeResult {
 /// "seiche bake --resume DIR", quoted for a shell when DIR needs it.
 std::string resume_command(const std::filesystem::path& dir);
 
-/// Bakes (or, with options.resume, continues baking) `scene`, described by `recipe`. Checks that
-/// the folder can be written before stepping anything. Throws IoError (a file could not be
+/// Bakes (or, with options.resume, continues baking) `scene`, described by `recipe`. Checks before
+/// stepping anything that every exporter's files lie inside the folder and that the folder, the
+/// report and the checkpoint can be written. A new bake (not a resume) into a folder with an
+/// earlier bake.json removes that bake's frame files outside the new range (earlier_bake.hpp). Throws IoError (a file could not be
 /// written; what() names it and says which frame and checkpoint are kept), SimulationError (the
 /// state became non-finite; no checkpoint of it is written), ResumeError (the checkpoint cannot
 /// be used) or SceneError.

@@ -51,4 +51,10 @@ class FrameExporter {
 /// its own target (it links OpenVDB) and the app adds it.
 std::vector<std::unique_ptr<FrameExporter>> family_exporters(const SceneDef& scene);
 
+/// Checks before the first frame that every file `exporter` writes for frames first_frame and
+/// last_frame (the names differ only in the frame number) lies inside `dir`
+/// (check_file_name_inside, output_files.hpp). Throws IoError.
+void check_frame_files_inside(const FrameExporter& exporter, const std::filesystem::path& dir, int first_frame,
+                              int last_frame);
+
 }  // namespace seiche

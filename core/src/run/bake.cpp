@@ -17,6 +17,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "earlier_bake.hpp"
 #include "progress.hpp"
 #include "run_report.hpp"
 #include "seiche/kernels/simd_info.hpp"
@@ -24,6 +25,7 @@
 #include "seiche/scene_loader.hpp"
 #include "seiche/simulation.hpp"
 #include "seiche/thread_count.hpp"
+#include "scene/output_name.hpp"
 
 namespace seiche {
 
@@ -149,6 +151,10 @@ BakeRecipe read_bake_recipe(const fs::path& dir) {
 
 SceneDef load_recipe_scene(const BakeRecipe& recipe, const fs::path& recipe_file) {
   SceneDef scene = load_scene_text(recipe.scene_json, recipe_file.string(), recipe.overrides, recipe.scene_dir);
+  // The name the bake was started with (a file's stem, perhaps) names its files: checked as a
+  // scene's name is.
+  if (const std::string problem = detail::output_name_problem(recipe.scene_name); !problem.empty())
+    throw SceneError(recipe_file.string(), "scene_name", problem);
   scene.name = recipe.scene_name;
   return scene;
 }
@@ -189,6 +195,15 @@ class FrameWriter {
       files += e->files(frame).size();
     }
     return bytes;
+  }
+
+  /// The names of frame `frame`'s files, relative to the folder.
+  std::vector<std::string> files(int frame) const {
+    std::vector<std::string> names;
+    if (scene_.output.particles) names.push_back(frame_file_name("particles", frame, "ply"));
+    for (const FrameExporter* e : exporters_)
+      for (const fs::path& f : e->files(frame)) names.push_back(f.string());
+    return names;
   }
 
   /// "particles.0001.ply .. particles.0020.ply", one line per kind of file.
@@ -274,7 +289,19 @@ BakeResult bake_on_threads(const SceneDef& scene, const BakeRecipe& recipe,
     fmt::print(*options.progress, "no checkpoint in {} yet: baking {} from frame 1\n", dir.string(),
                scene.name);
   }
+  // Every place the bake writes: the frame files lie inside the folder; the folder, the report
+  // and the checkpoint can be written (bake.json is written below, a real write test).
+  for (const FrameExporter* e : options.exporters)
+    check_frame_files_inside(*e, dir, recipe.first_frame, recipe.last_frame);
   prepare_output_directory(dir);
+  check_output_file_writable(dir / kBakeReportFile);
+  check_output_file_writable(checkpoint_file);
+  FrameWriter writer(scene, dir, options.exporters);
+  // A new bake replaces an earlier one in the folder: none of its frames may stay beside ours.
+  if (!options.resume)
+    remove_earlier_bake_frames(
+        dir, recipe.first_frame, recipe.last_frame, [&](int frame) { return writer.files(frame); },
+        options.progress);
   const std::string recipe_text = encode_bake_recipe(recipe);
   // A resume rewrites the same bytes: a real write test (access() says yes to root everywhere).
   write_file_atomically(dir / kBakeRecipeFile, recipe_text);
@@ -292,7 +319,6 @@ BakeResult bake_on_threads(const SceneDef& scene, const BakeRecipe& recipe,
   run.particles = sim.particles().size();
   const std::vector<std::string> pipeline = sim.pipeline();
   RunReport report(scene, run.particles, recipe.last_frame, run.threads, pipeline);
-  FrameWriter writer(scene, dir, options.exporters);
   Progress progress(options.progress, recipe.last_frame);
   const int every = std::max(scene.output.checkpoint_every, 1);
   auto interrupted = [&] { return options.interrupt && options.interrupt->load(); };

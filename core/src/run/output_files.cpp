@@ -13,6 +13,8 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "seiche/frame_exporter.hpp"
+
 namespace seiche {
 
 namespace {
@@ -21,12 +23,27 @@ namespace {
   throw IoError(fmt::format("{}: {}: {}", path.string(), what, std::strerror(err)));
 }
 
+// write_file_atomically's temporary twin of `path`: ".<name>.tmp" in the same folder.
+std::filesystem::path temporary_twin(const std::filesystem::path& path) {
+  return path.parent_path() / fmt::format(".{}.tmp", path.filename().string());
+}
+
+// Creates `probe` (a new file: no link is followed) and removes it; the errno of a failure, or 0.
+int probe_create(const std::filesystem::path& probe) {
+  const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_NOFOLLOW | O_CLOEXEC, 0644);
+  if (fd < 0) return errno;
+  ::close(fd);
+  ::unlink(probe.c_str());
+  return 0;
+}
+
 }  // namespace
 
 void write_file_atomically(const std::filesystem::path& path, std::string_view bytes) {
-  const std::filesystem::path tmp =
-      path.parent_path() / fmt::format(".{}.tmp", path.filename().string());
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  const std::filesystem::path tmp = temporary_twin(path);
+  // O_NOFOLLOW: a symbolic link planted at the temporary name cannot redirect the bytes (the
+  // rename below replaces a link at `path` itself instead of writing through it).
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_NOFOLLOW | O_CLOEXEC, 0644);
   if (fd < 0) fail(path, "cannot create file", errno);
   std::size_t done = 0;
   while (done < bytes.size()) {
@@ -57,8 +74,34 @@ void prepare_output_directory(const std::filesystem::path& dir) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec) throw IoError(fmt::format("{}: cannot create output folder: {}", dir.string(), ec.message()));
-  if (::access(dir.c_str(), W_OK) != 0)
-    fail(dir, "output folder is not writable", errno);
+  if (const int err = probe_create(dir / fmt::format(".seiche-write-test-{}.tmp", ::getpid())); err != 0)
+    fail(dir, "output folder is not writable", err);
+}
+
+void check_output_file_writable(const std::filesystem::path& file) {
+  std::error_code ec;
+  const std::string name = file.filename().string();
+  if (name.empty() || name == "." || name == ".." || std::filesystem::is_directory(file, ec))
+    throw IoError(fmt::format("{}: is a folder; a file name is needed here", file.string()));
+  const std::filesystem::path dir = file.has_parent_path() ? file.parent_path() : ".";
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw IoError(fmt::format("{}: cannot create its folder {}: {}", file.string(), dir.string(), ec.message()));
+  if (const int err = probe_create(temporary_twin(dir / name)); err != 0) fail(file, "cannot create file", err);
+}
+
+void check_file_name_inside(const std::filesystem::path& dir, const std::filesystem::path& name) {
+  const std::string text = name.string();
+  if (text.empty() || name.is_absolute() || name.has_parent_path() || text == "." || text == ".." ||
+      text.find('/') != std::string::npos)
+    throw IoError(fmt::format("{}: the output file name \"{}\" is not a plain file name inside the folder; "
+                              "nothing was written",
+                              dir.string(), text));
+}
+
+void check_frame_files_inside(const FrameExporter& exporter, const std::filesystem::path& dir, int first_frame,
+                              int last_frame) {
+  for (const int frame : {first_frame, last_frame})
+    for (const std::filesystem::path& name : exporter.files(frame)) check_file_name_inside(dir, name);
 }
 
 std::string encode_particles_ply(const ParticleStore& s) {

@@ -47,9 +47,14 @@ RunResult run_on_threads(const SceneDef& scene, const RunOptions& options, int t
 
   Simulation sim(scene);  // before any folder is made: a scene that cannot be built writes nothing
   const std::vector<std::unique_ptr<FrameExporter>> exporters = family_exporters(scene);  // the cloths' OBJ
-  if (!options.out_dir.empty()) prepare_output_directory(options.out_dir);
-  if (!options.report.empty() && options.report.has_parent_path())
-    prepare_output_directory(options.report.parent_path());
+  // Every place the run writes is checked before the first frame: the frame files lie inside the
+  // folder, the folder and the report can be written (a report into /proc or onto a folder fails
+  // here, not after the simulation).
+  if (!options.report.empty()) check_output_file_writable(options.report);
+  if (!options.out_dir.empty()) {
+    for (const auto& e : exporters) check_frame_files_inside(*e, options.out_dir, 1, frames);
+    prepare_output_directory(options.out_dir);
+  }
 
   result.particles = sim.particles().size();
   const std::vector<std::string> pipeline = sim.pipeline();

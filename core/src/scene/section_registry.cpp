@@ -2,12 +2,15 @@
 // scene's root object through it.
 #include "scene_section.hpp"
 
+#include <fmt/format.h>
+
 #include "core_sections.hpp"
 #include "families/cloth/cloth_reader.hpp"
 #include "families/collider/collider_reader.hpp"
 #include "families/distance/distance_reader.hpp"
 #include "families/fluid/fluid_reader.hpp"
 #include "families/shape/shape_reader.hpp"
+#include "output_name.hpp"
 
 namespace seiche::detail {
 
@@ -33,8 +36,9 @@ const KeyTable<SceneDef>& root_keys() {
       Key<SceneDef>("name", &SceneDef::name)
           .default_text("the file's stem (`scenes/pool.json` → `pool`); `scene` for a scene given as text "
                         "(e.g. the built-in one, which sets its name)")
-          .valid_note("not empty")
-          .doc("the scene's name: the stem of the fluid's output files"),
+          .valid_note(kOutputNameRule)
+          .doc("the scene's name: the stem of the fluid's output files and of the default output folder "
+               "`out/<name>`"),
   };
   return keys;
 }
@@ -55,7 +59,11 @@ std::vector<KeyTableDoc> scene_key_tables() {
 
 void read_scene_sections(JsonReader root, SceneDef& scene) {
   read_keys(root, root_keys(), scene);
-  if (scene.name.empty()) root.fail_at("name", "must not be empty");
+  if (const std::string problem = output_name_problem(scene.name); !problem.empty())
+    root.fail_at("name", root.has("name") ? problem
+                                          : fmt::format("the scene has no \"name\", and its default, the file's "
+                                                        "stem, {}; set \"name\" in the scene or --set name=...",
+                                                        problem));
   for (const SceneSection& s : scene_sections()) {
     if (s.is_array) {
       for (const JsonReader& entry : root.objects(s.key)) s.read(entry, scene);

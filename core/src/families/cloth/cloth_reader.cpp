@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include "cloth_mesh.hpp"
+#include "scene/output_name.hpp"
 #include "scene/shared_keys.hpp"
 
 namespace seiche::detail {
@@ -18,13 +19,19 @@ namespace {
 
 constexpr double kMaxSheetResolution = 4096;  // vertices per side: 16 M vertices in all
 
+std::string_view name_rule() {
+  static const std::string rule =
+      fmt::format("{}; ignoring case, not `particles`, another cloth's, or (in a scene with fluid) the scene's name",
+                  kOutputNameRule);
+  return rule;
+}
+
 const KeyTable<ClothDef>& cloth_keys() {
   using K = Key<ClothDef>;
   static const KeyTable<ClothDef> keys{
       K("name", &ClothDef::name)
           .default_text("`cloth<k>`")
-          .valid_note("not empty; not `particles`, another cloth's, or (in a scene with fluid) the scene's "
-                      "name")
+          .valid_note(name_rule())
           .doc("output file stem"),
       nested<ClothDef>("sheet", "object").default_text("–").valid_note("see below")
           .doc("a generated rectangular sheet"),
@@ -113,7 +120,7 @@ void read_cloth(JsonReader r, SceneDef& scene) {
   ClothDef c;
   c.name = fmt::format("cloth{}", scene.cloths.size());
   read_keys(r, cloth_keys(), c);
-  if (c.name.empty()) r.fail_at("name", "must not be empty");
+  if (const std::string problem = output_name_problem(c.name); !problem.empty()) r.fail_at("name", problem);
   if (auto box = r.optional_object("pin_box")) c.pin_box = read_box(*box);
   auto sheet = r.optional_object("sheet");
   auto mesh = r.optional_object("mesh");
@@ -129,19 +136,24 @@ void read_cloth(JsonReader r, SceneDef& scene) {
 // Every cloth's mesh is built here once and kept in the definition (mesh paths become absolute:
 // a resumed bake may run elsewhere).
 void check_cloths(SceneDef& scene, const std::string& file) {
-  // Taken output stems: the particle files, and the fluid's .vdb / .obj (named after the scene).
-  std::vector<std::string> names{"particles"};
-  if (!scene.fluids.empty()) names.push_back(scene.name);
+  // Taken output stems, compared as output_name_key (equal ignoring case: the same files on a
+  // case-folding file system), with who took them: the particle files, the fluid's .vdb / .obj
+  // (named after the scene), the cloths before.
+  std::vector<std::pair<std::string, std::string>> taken{{"particles", "the particle files (particles.%04d.ply)"}};
+  if (!scene.fluids.empty())
+    taken.emplace_back(output_name_key(scene.name),
+                       fmt::format("name (\"{}\", the scene's name, which names the fluid's files)", scene.name));
   for (std::size_t k = 0; k < scene.cloths.size(); ++k) {
     ClothDef& c = scene.cloths[k];
     const std::string path = element_path("cloths", k);
-    if (std::find(names.begin(), names.end(), c.name) != names.end())
-      fail(file, path + ".name",
-           fmt::format("\"{}\" is taken (by the particle files, the fluid's files named after the scene, or another "
-                       "cloth); "
-                       "output files are named after it",
-                       c.name));
-    names.push_back(c.name);
+    const std::string key = output_name_key(c.name);
+    for (const auto& [other, owner] : taken)
+      if (other == key)
+        fail(file, path + ".name",
+             fmt::format("\"{}\" writes the same files as {} (output names are compared ignoring case: "
+                         "case-folding file systems); give the cloth another name",
+                         c.name, owner));
+    taken.emplace_back(key, fmt::format("{}.name (\"{}\")", path, c.name));
     auto mesh = std::make_shared<ClothMesh>();
     if (c.mesh) {
       c.mesh->file = resolve_mesh_path(c.mesh->file, scene.base_dir);
