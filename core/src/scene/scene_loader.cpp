@@ -15,6 +15,7 @@
 
 #include <fmt/format.h>
 
+#include "json_parser.hpp"
 #include "json_reader.hpp"
 #include "scene_section.hpp"
 
@@ -33,98 +34,11 @@ using detail::JsonReader;
 using detail::element_path;
 using detail::fail;
 using detail::member_path;
+using detail::parse_json;
 
 const std::string kCommandLine = "(command line)";
 
-// ---- Step 1: parse ---------------------------------------------------------------------------
-
-// nlohmann keeps the last of two equal keys without a word; a scene with two "fluids" arrays is a
-// mistake, so a parser callback tracks the path and the keys seen in each open object.
-class DuplicateKeyCheck {
- public:
-  explicit DuplicateKeyCheck(const std::string& file) : file_(&file) {}
-
-  bool operator()(int /*depth*/, Json::parse_event_t event, Json& parsed) {
-    switch (event) {
-      case Json::parse_event_t::object_start: open_.push_back({false, 0, {}, {}}); break;
-      case Json::parse_event_t::array_start: open_.push_back({true, 0, {}, {}}); break;
-      case Json::parse_event_t::key: {
-        Frame& top = open_.back();
-        top.key = parsed.get<std::string>();
-        if (std::find(top.seen.begin(), top.seen.end(), top.key) != top.seen.end())
-          fail(*file_, path(), "duplicate key; a key may appear only once per object");
-        top.seen.push_back(top.key);
-        break;
-      }
-      case Json::parse_event_t::object_end:
-      case Json::parse_event_t::array_end:
-        open_.pop_back();
-        next_element();
-        break;
-      case Json::parse_event_t::value: next_element(); break;
-    }
-    return true;
-  }
-
- private:
-  struct Frame {
-    bool is_array;
-    std::size_t index;           // arrays: the element being parsed
-    std::string key;             // objects: the member being parsed
-    std::vector<std::string> seen;
-  };
-
-  void next_element() {
-    if (!open_.empty() && open_.back().is_array) ++open_.back().index;
-  }
-
-  std::string path() const {
-    std::string p;
-    for (const Frame& f : open_) p = f.is_array ? element_path(p, f.index) : member_path(p, f.key);
-    return p;
-  }
-
-  const std::string* file_;
-  std::vector<Frame> open_;
-};
-
-// "line 3, column 14" of the 0-based byte offset `pos` (clamped to the end of the text).
-std::string line_and_column(std::string_view text, std::size_t pos) {
-  pos = std::min(pos, text.size());
-  const auto before = text.substr(0, pos);
-  const std::size_t line = 1 + static_cast<std::size_t>(std::count(before.begin(), before.end(), '\n'));
-  const std::size_t line_start = before.rfind('\n');
-  const std::size_t column = line_start == std::string_view::npos ? pos + 1 : pos - line_start;
-  return fmt::format("line {}, column {}", line, column);
-}
-
-Json parse_json(std::string_view text, const std::string& file) {
-  try {
-    DuplicateKeyCheck check(file);
-    return Json::parse(text.begin(), text.end(), std::ref(check));
-  } catch (const Json::parse_error& e) {
-    // e.what() is "[json.exception.parse_error.101] parse error at line 4, column 0: <detail>".
-    // nlohmann counts a newline as the start of the next line, so "tru\n" would be reported on
-    // the line below the typo; recomputing from the byte offset names the line of the last read
-    // character (e.byte is 1-based).
-    const std::string message = e.what();
-    const auto at = message.find(": ", message.find("parse error"));
-    const std::string detail = at == std::string::npos ? message : message.substr(at + 2);
-    fail(file, "", fmt::format("malformed JSON at {}: {}", line_and_column(text, e.byte > 0 ? e.byte - 1 : 0), detail));
-  } catch (const Json::exception& e) {
-    // out_of_range.406 "number overflow parsing '1e400'" has no offset: find the literal.
-    std::string message = e.what();
-    const auto bracket = message.find("] ");
-    if (bracket != std::string::npos) message = message.substr(bracket + 2);
-    const auto open = message.find('\'');
-    const auto close = message.rfind('\'');
-    const auto pos = open < close ? text.find(std::string_view(message).substr(open + 1, close - open - 1))
-                                  : std::string_view::npos;
-    fail(file, "",
-         pos == std::string_view::npos ? fmt::format("malformed JSON: {}", message)
-                                       : fmt::format("malformed JSON at {}: {}", line_and_column(text, pos), message));
-  }
-}
+// ---- Step 1: parse (json_parser.hpp) --------------------------------------------------------
 
 // ---- Step 2: overrides -----------------------------------------------------------------------
 
