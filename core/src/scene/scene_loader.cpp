@@ -9,7 +9,6 @@
 #include <cerrno>
 #include <charconv>
 #include <cstdio>
-#include <functional>
 #include <memory>
 #include <system_error>
 
@@ -158,15 +157,45 @@ SceneDef load_scene(std::string_view text, const std::string& file, std::span<co
   return read_scene(document, file, default_name, base_dir);
 }
 
+// What a path that is not a regular file is, for the message.
+std::string_view kind_of_file(std::filesystem::file_type type) {
+  switch (type) {
+    case std::filesystem::file_type::directory: return "a directory";
+    case std::filesystem::file_type::character: return "a character device";
+    case std::filesystem::file_type::block: return "a block device";
+    case std::filesystem::file_type::fifo: return "a FIFO (named pipe)";
+    case std::filesystem::file_type::socket: return "a socket";
+    default: return "of an unknown kind";
+  }
+}
+
+// `size`: "1073741824 bytes"
+[[noreturn]] void fail_too_large(const std::string& file, const std::string& size) {
+  fail(file, "(file)", fmt::format("cannot open: it holds {}, over the limit of {} bytes ({} MiB) for a scene file",
+                                   size, kMaxSceneFileBytes, kMaxSceneFileBytes >> 20));
+}
+
+// The file's text. Refused before reading anything: a path that is not a regular file (a device
+// such as /dev/zero, a FIFO that might never end, a directory) and a file over
+// kMaxSceneFileBytes. The read stops past the limit too, in case the file grows meanwhile.
 std::string read_file(const std::filesystem::path& path, const std::string& file) {
   std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) fail(file, "(file)", "cannot open: it is a directory");
+  const std::filesystem::file_status status = std::filesystem::status(path, ec);  // follows links
+  if (std::filesystem::exists(status) && !std::filesystem::is_regular_file(status))
+    fail(file, "(file)", fmt::format("cannot open: not a regular file (it is {})", kind_of_file(status.type())));
+  if (std::filesystem::is_regular_file(status)) {
+    const std::uintmax_t size = std::filesystem::file_size(path, ec);
+    if (!ec && size > kMaxSceneFileBytes) fail_too_large(file, fmt::format("{} bytes", size));
+  }
   const std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(path.c_str(), "rb"), &std::fclose);
   if (!f) fail(file, "(file)", "cannot open: " + std::generic_category().message(errno));
   std::string text;
   char buffer[1 << 16];
   std::size_t n = 0;
-  while ((n = std::fread(buffer, 1, sizeof buffer, f.get())) > 0) text.append(buffer, n);
+  while ((n = std::fread(buffer, 1, sizeof buffer, f.get())) > 0) {
+    text.append(buffer, n);
+    if (text.size() > kMaxSceneFileBytes) fail_too_large(file, fmt::format("{} bytes or more", text.size()));
+  }
   if (std::ferror(f.get())) fail(file, "(file)", "cannot read: " + std::generic_category().message(errno));
   return text;
 }
