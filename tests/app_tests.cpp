@@ -138,6 +138,22 @@ TEST(Cli, MissingFile) {
   EXPECT_FALSE(fs::exists(work_dir() / "out_missing"));
 }
 
+// A scene path that is not a regular file is refused before it is read (/dev/zero would be read
+// until memory runs out), by run and by bake, naming the file; nothing is written.
+TEST(Cli, DeviceOrDirectoryIsNotAScene) {
+  for (const auto& [path, kind] : {std::pair{fs::path("/dev/zero"), "character device"},
+                                   std::pair{work_dir(), "directory"}}) {
+    for (const char* command : {"run", "bake"}) {
+      const fs::path out = work_dir() / "out_not_a_file";
+      const Result r = seiche(std::string(command) + " '" + path.string() + "' --out '" + out.string() + "'");
+      EXPECT_EQ(r.code, 2) << command << " " << path << ": " << r.err;
+      EXPECT_NE(r.err.find(path.string() + ": (file): cannot open"), std::string::npos) << r.err;
+      EXPECT_NE(r.err.find(kind), std::string::npos) << r.err;
+      EXPECT_FALSE(fs::exists(out)) << command << " " << path;
+    }
+  }
+}
+
 TEST(Cli, MalformedJson) { expect_rejected("malformed", "{ \"solver\": { \"substeps\": 4, }", "line"); }
 TEST(Cli, UnknownKey) { expect_rejected("unknown", with("\"spacing\"", "\"spacng\""), "fluids[0].spacng"); }
 TEST(Cli, WrongType) { expect_rejected("type", with("\"mass\": 1 }, {", "\"mass\": \"heavy\" }, {"), "particles[0].mass"); }

@@ -9,12 +9,12 @@
 #include <cerrno>
 #include <charconv>
 #include <cstdio>
-#include <functional>
 #include <memory>
 #include <system_error>
 
 #include <fmt/format.h>
 
+#include "json_parser.hpp"
 #include "json_reader.hpp"
 #include "scene_section.hpp"
 
@@ -33,98 +33,11 @@ using detail::JsonReader;
 using detail::element_path;
 using detail::fail;
 using detail::member_path;
+using detail::parse_json;
 
 const std::string kCommandLine = "(command line)";
 
-// ---- Step 1: parse ---------------------------------------------------------------------------
-
-// nlohmann keeps the last of two equal keys without a word; a scene with two "fluids" arrays is a
-// mistake, so a parser callback tracks the path and the keys seen in each open object.
-class DuplicateKeyCheck {
- public:
-  explicit DuplicateKeyCheck(const std::string& file) : file_(&file) {}
-
-  bool operator()(int /*depth*/, Json::parse_event_t event, Json& parsed) {
-    switch (event) {
-      case Json::parse_event_t::object_start: open_.push_back({false, 0, {}, {}}); break;
-      case Json::parse_event_t::array_start: open_.push_back({true, 0, {}, {}}); break;
-      case Json::parse_event_t::key: {
-        Frame& top = open_.back();
-        top.key = parsed.get<std::string>();
-        if (std::find(top.seen.begin(), top.seen.end(), top.key) != top.seen.end())
-          fail(*file_, path(), "duplicate key; a key may appear only once per object");
-        top.seen.push_back(top.key);
-        break;
-      }
-      case Json::parse_event_t::object_end:
-      case Json::parse_event_t::array_end:
-        open_.pop_back();
-        next_element();
-        break;
-      case Json::parse_event_t::value: next_element(); break;
-    }
-    return true;
-  }
-
- private:
-  struct Frame {
-    bool is_array;
-    std::size_t index;           // arrays: the element being parsed
-    std::string key;             // objects: the member being parsed
-    std::vector<std::string> seen;
-  };
-
-  void next_element() {
-    if (!open_.empty() && open_.back().is_array) ++open_.back().index;
-  }
-
-  std::string path() const {
-    std::string p;
-    for (const Frame& f : open_) p = f.is_array ? element_path(p, f.index) : member_path(p, f.key);
-    return p;
-  }
-
-  const std::string* file_;
-  std::vector<Frame> open_;
-};
-
-// "line 3, column 14" of the 0-based byte offset `pos` (clamped to the end of the text).
-std::string line_and_column(std::string_view text, std::size_t pos) {
-  pos = std::min(pos, text.size());
-  const auto before = text.substr(0, pos);
-  const std::size_t line = 1 + static_cast<std::size_t>(std::count(before.begin(), before.end(), '\n'));
-  const std::size_t line_start = before.rfind('\n');
-  const std::size_t column = line_start == std::string_view::npos ? pos + 1 : pos - line_start;
-  return fmt::format("line {}, column {}", line, column);
-}
-
-Json parse_json(std::string_view text, const std::string& file) {
-  try {
-    DuplicateKeyCheck check(file);
-    return Json::parse(text.begin(), text.end(), std::ref(check));
-  } catch (const Json::parse_error& e) {
-    // e.what() is "[json.exception.parse_error.101] parse error at line 4, column 0: <detail>".
-    // nlohmann counts a newline as the start of the next line, so "tru\n" would be reported on
-    // the line below the typo; recomputing from the byte offset names the line of the last read
-    // character (e.byte is 1-based).
-    const std::string message = e.what();
-    const auto at = message.find(": ", message.find("parse error"));
-    const std::string detail = at == std::string::npos ? message : message.substr(at + 2);
-    fail(file, "", fmt::format("malformed JSON at {}: {}", line_and_column(text, e.byte > 0 ? e.byte - 1 : 0), detail));
-  } catch (const Json::exception& e) {
-    // out_of_range.406 "number overflow parsing '1e400'" has no offset: find the literal.
-    std::string message = e.what();
-    const auto bracket = message.find("] ");
-    if (bracket != std::string::npos) message = message.substr(bracket + 2);
-    const auto open = message.find('\'');
-    const auto close = message.rfind('\'');
-    const auto pos = open < close ? text.find(std::string_view(message).substr(open + 1, close - open - 1))
-                                  : std::string_view::npos;
-    fail(file, "",
-         pos == std::string_view::npos ? fmt::format("malformed JSON: {}", message)
-                                       : fmt::format("malformed JSON at {}: {}", line_and_column(text, pos), message));
-  }
-}
+// ---- Step 1: parse (json_parser.hpp) --------------------------------------------------------
 
 // ---- Step 2: overrides -----------------------------------------------------------------------
 
@@ -244,15 +157,45 @@ SceneDef load_scene(std::string_view text, const std::string& file, std::span<co
   return read_scene(document, file, default_name, base_dir);
 }
 
+// What a path that is not a regular file is, for the message.
+std::string_view kind_of_file(std::filesystem::file_type type) {
+  switch (type) {
+    case std::filesystem::file_type::directory: return "a directory";
+    case std::filesystem::file_type::character: return "a character device";
+    case std::filesystem::file_type::block: return "a block device";
+    case std::filesystem::file_type::fifo: return "a FIFO (named pipe)";
+    case std::filesystem::file_type::socket: return "a socket";
+    default: return "of an unknown kind";
+  }
+}
+
+// `size`: "1073741824 bytes"
+[[noreturn]] void fail_too_large(const std::string& file, const std::string& size) {
+  fail(file, "(file)", fmt::format("cannot open: it holds {}, over the limit of {} bytes ({} MiB) for a scene file",
+                                   size, kMaxSceneFileBytes, kMaxSceneFileBytes >> 20));
+}
+
+// The file's text. Refused before reading anything: a path that is not a regular file (a device
+// such as /dev/zero, a FIFO that might never end, a directory) and a file over
+// kMaxSceneFileBytes. The read stops past the limit too, in case the file grows meanwhile.
 std::string read_file(const std::filesystem::path& path, const std::string& file) {
   std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) fail(file, "(file)", "cannot open: it is a directory");
+  const std::filesystem::file_status status = std::filesystem::status(path, ec);  // follows links
+  if (std::filesystem::exists(status) && !std::filesystem::is_regular_file(status))
+    fail(file, "(file)", fmt::format("cannot open: not a regular file (it is {})", kind_of_file(status.type())));
+  if (std::filesystem::is_regular_file(status)) {
+    const std::uintmax_t size = std::filesystem::file_size(path, ec);
+    if (!ec && size > kMaxSceneFileBytes) fail_too_large(file, fmt::format("{} bytes", size));
+  }
   const std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(path.c_str(), "rb"), &std::fclose);
   if (!f) fail(file, "(file)", "cannot open: " + std::generic_category().message(errno));
   std::string text;
   char buffer[1 << 16];
   std::size_t n = 0;
-  while ((n = std::fread(buffer, 1, sizeof buffer, f.get())) > 0) text.append(buffer, n);
+  while ((n = std::fread(buffer, 1, sizeof buffer, f.get())) > 0) {
+    text.append(buffer, n);
+    if (text.size() > kMaxSceneFileBytes) fail_too_large(file, fmt::format("{} bytes or more", text.size()));
+  }
   if (std::ferror(f.get())) fail(file, "(file)", "cannot read: " + std::generic_category().message(errno));
   return text;
 }
