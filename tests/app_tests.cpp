@@ -824,3 +824,125 @@ TEST(CliVersion, PrintsTheSimdWidthCompilerAndFlagsOfTheBuild) {
   EXPECT_EQ(r.out.find(" -W", flags), std::string::npos) << "warnings are not build flags:\n"
                                                          << r.out;
 }
+
+// ---- Input fingerprints, memory and work bounds -------------------------------------------------
+
+namespace {
+
+// Two particles dropping onto a mesh collider (a 0.4 m cube read from the OBJ next to the scene).
+const char* kMeshColliderScene = R"({ "name": "onto_cube",
+  "solver": { "substeps": 4, "iterations": 2 },
+  "domain": { "min": [-1,0,-1], "max": [1,2,1] },
+  "output": { "frames": 20, "checkpoint_every": 3 },
+  "colliders": [ { "mesh": { "file": "cube.obj", "scale": 0.4, "translate": [0,0.2,0] } } ],
+  "particles": [ { "x": [0,0.5,0] }, { "x": [0.1,0.5,0] } ] })";
+
+}  // namespace
+
+// A collider mesh moved mid-bake (its bytes changed) or deleted: the resume is refused (exit 2)
+// naming the file and its field; with --accept-changed-inputs it continues with the new mesh.
+TEST(CliBake, ResumeWithAChangedOrMissingMeshIsRefusedUnlessAccepted) {
+  const fs::path scene_dir = work_dir() / "mesh_inputs";
+  fs::create_directories(scene_dir);
+  const fs::path obj = scene_dir / "cube.obj";
+  const std::string cube = slurp(fs::path(SEICHE_SCENES_DIR) / "meshes" / "cube.obj");
+  std::ofstream(obj, std::ios::binary) << cube;
+  const fs::path scene = scene_dir / "onto_cube.json";
+  std::ofstream(scene) << kMeshColliderScene;
+  const fs::path straight = fresh_dir("mesh_straight"), dir = fresh_dir("mesh_resumed");
+  ASSERT_EQ(seiche("bake " + q(scene) + " --out " + q(straight)).code, 0);
+  const Result stopped = seiche("bake " + q(scene) + " --out " + q(dir), "SEICHE_TEST_INTERRUPT_AFTER_FRAME=4");
+  ASSERT_EQ(stopped.code, 130) << stopped.err;
+  EXPECT_NE(slurp(dir / "bake.json").find("colliders[0].mesh.file"), std::string::npos);
+  const auto frames_before = bake_files(dir);
+
+  // The cube's top moved up by 0.1 m in the file (0.04 m in the scene).
+  std::string moved = cube;
+  for (std::size_t at = moved.find(" 0.5 "); at != std::string::npos; at = moved.find(" 0.5 ", at + 1))
+    moved.replace(at, 5, " 0.6 ");
+  ASSERT_NE(moved, cube);
+  std::ofstream(obj, std::ios::binary | std::ios::trunc) << moved;
+  const Result changed = seiche("bake --resume " + q(dir));
+  EXPECT_EQ(changed.code, 2) << changed.err;
+  for (const std::string s : {obj.string(), std::string("colliders[0].mesh.file"), std::string("changed"),
+                              std::string("--accept-changed-inputs")})
+    EXPECT_NE(changed.err.find(s), std::string::npos) << s << " missing from: " << changed.err;
+  EXPECT_TRUE(bake_files(dir) == frames_before) << "a refused resume wrote into the bake";
+
+  fs::remove(obj);
+  for (const char* flags : {"", " --accept-changed-inputs"}) {
+    const Result missing = seiche("bake --resume " + q(dir) + flags);
+    EXPECT_EQ(missing.code, 2) << missing.err;
+    for (const std::string s : {obj.string(), std::string("colliders[0].mesh.file"), std::string("missing")})
+      EXPECT_NE(missing.err.find(s), std::string::npos) << s << " missing from: " << missing.err;
+  }
+  EXPECT_TRUE(bake_files(dir) == frames_before) << "a refused resume wrote into the bake";
+
+  // Accepted: the bake finishes with the moved cube, so the particles come to rest 0.04 m higher
+  // than in the unbroken bake (the frames before the checkpoint are the unbroken bake's).
+  std::ofstream(obj, std::ios::binary) << moved;
+  const Result accepted = seiche("bake --resume " + q(dir) + " --accept-changed-inputs");
+  ASSERT_EQ(accepted.code, 0) << accepted.err;
+  EXPECT_NE(accepted.err.find("warning"), std::string::npos) << accepted.err;
+  EXPECT_EQ(slurp(dir / "particles.0004.ply"), slurp(straight / "particles.0004.ply"));
+  EXPECT_NE(slurp(dir / "particles.0020.ply"), slurp(straight / "particles.0020.ply"));
+  // bake.json now records the moved cube: a further resume of the complete bake passes.
+  EXPECT_EQ(seiche("bake --resume " + q(dir)).code, 0);
+}
+
+// --max-memory below the estimate: exit 2 before anything is written, naming the estimate and the
+// limit; the 4096 x 4096 sheet (the largest resolution) is refused by its estimate, not by
+// std::bad_alloc, even without a limit here: it needs more than 30 GiB.
+TEST(Cli, SceneOverTheMemoryLimitIsRefusedWithItsEstimate) {
+  const fs::path scene = fs::path(SEICHE_SCENES_DIR) / "cloth_drape.json";
+  const fs::path out = fresh_dir("out_memory");
+  const Result r = seiche("run " + q(scene) + " --frames 1 --max-memory 40M --out " + q(out));
+  EXPECT_EQ(r.code, 2) << r.err;
+  for (const char* s : {"cloth_drape.json", "needs about", "MiB", "--max-memory limit of 40 MiB", "cloths[0]"})
+    EXPECT_NE(r.err.find(s), std::string::npos) << s << " missing from: " << r.err;
+  EXPECT_FALSE(fs::exists(out));
+  EXPECT_EQ(seiche("run " + q(scene) + " --frames 1 --max-memory 200M --out " + q(out)).code, 0);
+  EXPECT_EQ(seiche("run " + q(scene) + " --frames 1 --max-memory lots --out " + q(out)).code, 2);
+
+  const Result big = seiche("bake " + q(scene) + " --frames 1 --max-memory 8G --set 'cloths[0].sheet.resolution=[4096,4096]' --out " +
+                            q(fresh_dir("out_big")));
+  EXPECT_EQ(big.code, 2) << big.err;
+  for (const char* s : {"cloths[0].sheet.resolution", "16777216 vertices", "GiB"})
+    EXPECT_NE(big.err.find(s), std::string::npos) << s << " missing from: " << big.err;
+  EXPECT_EQ(big.err.find("bad_alloc"), std::string::npos) << big.err;
+}
+
+// substeps 10000 x iterations 10000 (1e8 solver iterations per frame, past the bound of 1e5) is
+// refused naming solver.substeps; --allow-huge-work runs it (here 1000 x 101, a fraction of a
+// second for two particles).
+TEST(Cli, HugeWorkIsRefusedUnlessAllowed) {
+  const fs::path scene = fs::path(SEICHE_SCENES_DIR) / "seed_example.json";
+  const fs::path out = fresh_dir("out_huge");
+  const Result r = seiche("run " + q(scene) + " --frames 1 --set solver.substeps=10000 --set solver.iterations=10000 --out " + q(out));
+  EXPECT_EQ(r.code, 2) << r.err;
+  for (const char* s : {"solver.substeps", "1e+08", "--allow-huge-work"})
+    EXPECT_NE(r.err.find(s), std::string::npos) << s << " missing from: " << r.err;
+  EXPECT_FALSE(fs::exists(out));
+  const std::string over = " --frames 1 --set solver.substeps=1000 --set solver.iterations=101 --out " + q(out);
+  EXPECT_EQ(seiche("run " + q(scene) + over).code, 2);
+  const Result allowed = seiche("run " + q(scene) + over + " --allow-huge-work");
+  EXPECT_EQ(allowed.code, 0) << allowed.err;
+  EXPECT_TRUE(fs::exists(out / "particles.0001.ply"));
+}
+
+// An allocation that fails anyway (here under a 700 MB address-space limit that the machine's
+// available memory does not show) exits 1 saying what was being done, for which scene and size.
+TEST(Cli, OutOfMemoryNamesTheStageSceneAndSize) {
+#if defined(__SANITIZE_ADDRESS__)
+  GTEST_SKIP() << "AddressSanitizer reserves more address space than the limit";
+#else
+  const fs::path scene = fs::path(SEICHE_SCENES_DIR) / "dam_break.json";
+  const Result r = seiche("run " + q(scene) + " --frames 1 --threads 2 --set 'fluids[0].spacing=0.008' --out " +
+                              q(fresh_dir("out_oom")),
+                          "ulimit -v 700000;");
+  EXPECT_EQ(r.code, 1) << r.err;
+  for (const char* s : {"out of memory while building and simulating scene dam_break", "1953125 particles",
+                        "estimated"})
+    EXPECT_NE(r.err.find(s), std::string::npos) << s << " missing from: " << r.err;
+#endif
+}

@@ -14,6 +14,8 @@
 #include "seiche/bake.hpp"
 #include "seiche/kernels/simd_info.hpp"
 #include "seiche/checkpoint.hpp"
+#include "seiche/input_fingerprint.hpp"
+#include "seiche/memory_estimate.hpp"
 #include "seiche/output_files.hpp"
 #include "seiche/runner.hpp"
 #include "seiche/scene_loader.hpp"
@@ -726,4 +728,141 @@ TEST(Bake, ANewBakeRemovesTheEarlierBakesFramesOutsideItsRangeAndNothingElse) {
   bake_scene(scene, mixed_recipe(1, 2), o);
   EXPECT_NE(warned.str().find("records no valid frame range"), std::string::npos) << warned.str();
   for (int f = 1; f <= 6; ++f) EXPECT_TRUE(fs::exists(dir / frame_file_name("particles", f, "ply"))) << f;
+}
+
+// ---- Input fingerprints and the memory estimate ----------------------------------------------
+
+// bake.json records the OBJ files the scene refers to as the loader read them; a resume finds a
+// changed file (size or hash), a file the scene no longer names, and a missing one.
+TEST(InputFingerprint, RecordedWithTheRecipeAndComparedOnResume) {
+  const fs::path dir = fresh_dir("inputs");
+  const std::string cube = read_bytes(fs::path(SEICHE_SCENES_DIR) / "meshes" / "cube.obj");
+  write_bytes(dir / "cube.obj", cube);
+  const std::string scene_text = R"({ "name": "meshes", "domain": { "min": [-1,0,-1], "max": [1,2,1] },
+    "colliders": [ { "sphere": { "center": [0,0.3,0], "radius": 0.1 } },
+                   { "mesh": { "file": "cube.obj", "scale": 0.4, "translate": [0,0.5,0] } } ],
+    "particles": [ { "x": [0,1.5,0] } ] })";
+  const SceneDef scene = load_scene_text(scene_text, "meshes.json", {}, dir);
+  const std::vector<InputFile> inputs = scene_input_files(scene);
+  ASSERT_EQ(inputs.size(), 1u);
+  EXPECT_EQ(inputs[0].json_path, "colliders[1].mesh.file");
+  EXPECT_EQ(inputs[0].file, (dir / "cube.obj").string());
+  EXPECT_EQ(inputs[0].bytes, cube.size());
+  EXPECT_EQ(inputs[0].fnv1a64, fnv1a64(cube));  // the bytes the loader read
+
+  BakeRecipe r = make_bake_recipe("meshes", "meshes.json", scene_text, {}, 1, 4);
+  r.scene_dir = dir.string();
+  r.inputs = inputs;
+  write_file_atomically(dir / kBakeRecipeFile, encode_bake_recipe(r));
+  const BakeRecipe back = read_bake_recipe(dir);
+  EXPECT_EQ(back.inputs, inputs);
+  EXPECT_TRUE(input_file_changes(back.inputs, scene_input_files(load_recipe_scene(back, dir / kBakeRecipeFile))).empty());
+
+  // One byte more: the size and the hash differ, and the message names the file and the path.
+  write_bytes(dir / "cube.obj", cube + "\n");
+  const std::vector<InputFile> now = scene_input_files(load_recipe_scene(back, dir / kBakeRecipeFile));
+  EXPECT_EQ(now[0].bytes, cube.size() + 1);
+  const std::vector<std::string> changes = input_file_changes(back.inputs, now);
+  ASSERT_EQ(changes.size(), 1u);
+  EXPECT_NE(changes[0].find((dir / "cube.obj").string()), std::string::npos) << changes[0];
+  EXPECT_NE(changes[0].find("colliders[1].mesh.file"), std::string::npos) << changes[0];
+  EXPECT_THROW(check_inputs_unchanged(back.inputs, now, dir / kBakeRecipeFile, false, nullptr), ResumeError);
+  std::ostringstream warning;
+  EXPECT_NO_THROW(check_inputs_unchanged(back.inputs, now, dir / kBakeRecipeFile, true, &warning));
+  EXPECT_NE(warning.str().find("changed"), std::string::npos) << warning.str();
+  // A file no longer in the scene, and one not recorded.
+  EXPECT_EQ(input_file_changes(back.inputs, {}).size(), 1u);
+  EXPECT_EQ(input_file_changes({}, now).size(), 1u);
+
+  fs::remove(dir / "cube.obj");
+  try {
+    check_recorded_inputs_present(back.inputs, dir / kBakeRecipeFile);
+    ADD_FAILURE() << "a missing input was accepted";
+  } catch (const ResumeError& e) {
+    EXPECT_NE(std::string(e.what()).find((dir / "cube.obj").string()), std::string::npos) << e.what();
+  }
+}
+
+// The estimate's particle store is the store's bytes() once every pass has enabled its columns:
+// the same column table (built-in, fluid and vorticity scratch, shape rest offsets, 3 reorder
+// spares) times the same padded length, allocated once (Simulation reserves the count). It may
+// only be above: the 3 spares are allocated at the store's first reorder (the fluid's grid sort),
+// so a store that never reorders holds 13 of the estimate's 16 columns or more (at most 23 % over).
+TEST(MemoryEstimate, ParticleStoreIsTheStoresBytes) {
+  for (const char* name : {"dam_break.json", "cloth_drape.json", "shapes.json", "cloth_on_fluid.json"}) {
+    const SceneDef scene = load_scene_file(fs::path(SEICHE_SCENES_DIR) / name);
+    const MemoryEstimate e = estimate_scene_memory(scene);
+    Simulation sim(scene);
+    sim.step_frame();
+    EXPECT_EQ(e.particles, sim.particles().size()) << name;
+    const double store = double(sim.particles().bytes());
+    EXPECT_GE(double(e.particle_store), store) << name;
+    EXPECT_LE(double(e.particle_store), (scene.fluids.empty() ? 16.0 / 13.0 : 1.0) * store) << name;
+    EXPECT_GE(e.total(), e.particle_store + kProcessBytes) << name;
+  }
+  // A 4096 x 4096 sheet (the largest resolution): 16.8M vertices, 33.5M triangles; its estimate
+  // is computed from the definition, before any mesh exists.
+  SceneDef big;
+  big.domain.min = {-10, -10, -10};
+  big.domain.max = {10, 10, 10};
+  ClothDef sheet;
+  sheet.sheet = SheetDef{};
+  sheet.sheet->resolution = {4096, 4096};
+  big.cloths.push_back(sheet);
+  const MemoryEstimate e = estimate_scene_memory(big);
+  EXPECT_EQ(e.particles, 4096u * 4096u);
+  EXPECT_EQ(e.largest().json_path, "cloths[0].sheet.resolution");
+  const double vertices = 4096.0 * 4096.0, triangles = 2.0 * 4095.0 * 4095.0;
+  EXPECT_NEAR(double(e.total()),
+              vertices * (16 * 4 + kExportBytesPerParticle + kClothBytesPerVertex) + triangles * kClothBytesPerTriangle +
+                  double(kProcessBytes),
+              0.001 * double(e.total()));
+  EXPECT_THROW(check_scene_memory(big, "big.json", std::uint64_t(1) << 30), SceneError);
+}
+
+TEST(MemoryEstimate, SizesParseAndPrint) {
+  EXPECT_EQ(parse_memory_size("512M"), std::uint64_t(512) << 20);
+  EXPECT_EQ(parse_memory_size("2G"), std::uint64_t(2) << 30);
+  EXPECT_EQ(parse_memory_size("1.5GiB"), std::uint64_t(3) << 29);
+  EXPECT_EQ(parse_memory_size("64kB"), std::uint64_t(64) << 10);
+  EXPECT_EQ(parse_memory_size("1000000"), std::uint64_t(1000000));
+  for (const char* bad : {"", "x", "-1G", "0", "12x", "1GG", "1e30"}) EXPECT_FALSE(parse_memory_size(bad)) << bad;
+  EXPECT_EQ(format_memory_size(100), "100 B");
+  EXPECT_EQ(format_memory_size(std::uint64_t(3) << 29), "1.5 GiB");
+  EXPECT_EQ(format_memory_size(std::uint64_t(300) << 20), "300 MiB");
+  const std::optional<std::uint64_t> available = available_memory();
+  ASSERT_TRUE(available);  // Linux: /proc/meminfo
+  EXPECT_GT(*available, 0u);
+}
+
+// substeps x iterations per frame up to 1e5 and that times the particles up to 1e11 pass; past
+// either, the scene is refused unless the caller allows huge work.
+TEST(MemoryEstimate, WorkBoundRefusesAbsurdSettingsUnlessAllowed) {
+  SceneDef two = load_scene_file(fs::path(SEICHE_SCENES_DIR) / "seed_example.json");
+  two.solver.substeps = 1000;
+  two.solver.iterations = 100;  // 1e5: at the bound
+  EXPECT_NO_THROW(check_scene_work(two, "two.json", false));
+  two.solver.iterations = 101;
+  try {
+    check_scene_work(two, "two.json", false);
+    ADD_FAILURE() << "1.01e5 iterations per frame were accepted";
+  } catch (const SceneError& e) {
+    EXPECT_EQ(e.json_path(), "solver.substeps");
+    EXPECT_NE(e.problem().find("--allow-huge-work"), std::string::npos) << e.what();
+  }
+  EXPECT_NO_THROW(check_scene_work(two, "two.json", true));
+  // The dam break (37^3 particles): 8 substeps x up to 32 iterations (density_tolerance) pass;
+  // 1000 x 20 (2e4 iterations, 1.0e9 particle-iterations per frame) too; at a spacing 10x finer
+  // (370^3 particles, 1.0e12 particle-iterations per frame) it is refused.
+  SceneDef dam = load_scene_file(fs::path(SEICHE_SCENES_DIR) / "dam_break.json");
+  EXPECT_NO_THROW(check_scene_work(dam, "dam.json", false));
+  EXPECT_EQ(estimate_scene_memory(dam).particles, 50653u);  // 37^3
+  dam.solver.substeps = 1000;
+  dam.solver.iterations = 20;
+  dam.solver.density_tolerance = 0.0f;  // exactly 2e4 iterations per frame
+  EXPECT_NO_THROW(check_scene_work(dam, "dam.json", false));
+  dam.fluids[0].spacing = 0.0027f;
+  EXPECT_EQ(estimate_scene_memory(dam).particles, 370u * 370u * 370u);
+  EXPECT_THROW(check_scene_work(dam, "dam.json", false), SceneError);
+  EXPECT_NO_THROW(check_scene_work(dam, "dam.json", true));
 }

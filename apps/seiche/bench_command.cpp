@@ -10,6 +10,7 @@
 #include "seiche/bench.hpp"
 #include "seiche/output_files.hpp"
 #include "seiche/scene_loader.hpp"
+#include "seiche/memory_estimate.hpp"
 #include "seiche/stability.hpp"
 
 namespace seiche_cli {
@@ -105,8 +106,13 @@ int bench_command(const BenchArgs& a) {
   const seiche::SceneFactory load = [&](const std::vector<std::string>& bench_overrides) {
     std::vector<std::string> overrides = a.overrides;  // the bench's own come last and win
     overrides.insert(overrides.end(), bench_overrides.begin(), bench_overrides.end());
-    return a.scene.empty() ? seiche::load_scene_text(seiche::default_scene_json(), "<default scene>", overrides)
-                           : seiche::load_scene_file(a.scene, overrides);
+    seiche::SceneDef scene = a.scene.empty()
+                                 ? seiche::load_scene_text(seiche::default_scene_json(), "<default scene>", overrides)
+                                 : seiche::load_scene_file(a.scene, overrides);
+    const std::string source = a.scene.empty() ? "<default scene>" : a.scene;
+    seiche::check_scene_memory(scene, source, a.max_memory);
+    seiche::check_scene_work(scene, source, a.allow_huge_work);
+    return scene;
   };
   seiche::check_bench(load, o);  // a bad scene or sweep stops here, before any folder is made
   const std::string name = load({}).name;

@@ -3,6 +3,8 @@
 // benchmarks/plot_bench.py), DIR/stability.csv.
 #pragma once
 
+#include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -21,6 +23,8 @@ struct BenchArgs {
   bool plot = true;
   bool stability = false;
   std::string size = "full";          // stability suite: full or reduced
+  std::optional<std::uint64_t> max_memory;  // --max-memory, checked for every scene the bench loads
+  bool allow_huge_work = false;       // --allow-huge-work
 };
 
 /// Runs the bench; returns the exit code (0; 3 when the plot could not be drawn; 5 when a

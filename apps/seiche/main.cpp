@@ -14,6 +14,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <iostream>
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <sstream>
@@ -28,7 +29,9 @@
 #include "bench_command.hpp"
 #include "seiche/bake.hpp"
 #include "seiche/bench.hpp"
+#include "seiche/input_fingerprint.hpp"
 #include "seiche/kernels/simd_info.hpp"
+#include "seiche/memory_estimate.hpp"
 #include "seiche/output_files.hpp"
 #include "seiche/runner.hpp"
 #include "seiche/scene_loader.hpp"
@@ -49,6 +52,52 @@ class UsageError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// What the command was doing, for the message of an allocation failure (exit 1).
+std::string g_stage = "starting";
+
+// --max-memory and --allow-huge-work (run, bake, bench): the checks of memory_estimate.hpp.
+struct ResourceArgs {
+  std::string max_memory;  // empty = the machine's available memory only
+  bool allow_huge_work = false;
+
+  std::optional<std::uint64_t> max_memory_bytes() const {
+    if (max_memory.empty()) return std::nullopt;
+    const std::optional<std::uint64_t> bytes = seiche::parse_memory_size(max_memory);
+    if (!bytes)
+      throw UsageError(fmt::format("--max-memory: expected a size such as 512M, 8G or 1.5GiB, got \"{}\"", max_memory));
+    return bytes;
+  }
+};
+
+void add_resource_options(CLI::App* command, ResourceArgs& args) {
+  command->add_option("--max-memory", args.max_memory,
+                      "Refuse a scene whose estimated memory is over SIZE (e.g. 8G, 512M); the machine's "
+                      "available memory is always a limit");
+  command->add_flag("--allow-huge-work", args.allow_huge_work,
+                    "Run a scene past the work bound (1e5 solver iterations or 1e11 particle-iterations per frame)");
+}
+
+// The stage an allocation failure names from now on: `doing` scene, its particles and its estimate.
+void set_simulating_stage(const char* doing, const seiche::SceneDef& scene) {
+  const seiche::MemoryEstimate estimate = seiche::estimate_scene_memory(scene);
+  g_stage = fmt::format("{} scene {} ({} particles, estimated {})", doing, scene.name, estimate.particles,
+                        seiche::format_memory_size(estimate.total()));
+}
+
+// Loads the scene (`source` empty: the built-in one) and checks it against the memory and work bounds.
+seiche::SceneDef load_checked_scene(const std::string& source, const std::vector<std::string>& overrides,
+                                    const ResourceArgs& resources) {
+  const std::optional<std::uint64_t> max_memory = resources.max_memory_bytes();
+  const std::string name = source.empty() ? "<default scene>" : source;
+  g_stage = "loading " + name;
+  seiche::SceneDef scene = source.empty() ? seiche::load_scene_text(seiche::default_scene_json(), name, overrides)
+                                          : seiche::load_scene_file(source, overrides);
+  seiche::check_scene_memory(scene, name, max_memory);
+  seiche::check_scene_work(scene, name, resources.allow_huge_work);
+  set_simulating_stage("building and simulating", scene);
+  return scene;
+}
+
 struct RunArgs {
   std::string scene;  // empty = the embedded default scene
   int frames = 0;
@@ -56,12 +105,11 @@ struct RunArgs {
   int threads = 0;
   std::string report;
   std::vector<std::string> overrides;
+  ResourceArgs resources;
 };
 
 int run_command(const RunArgs& a) {
-  const seiche::SceneDef scene =
-      a.scene.empty() ? seiche::load_scene_text(seiche::default_scene_json(), "<default scene>", a.overrides)
-                      : seiche::load_scene_file(a.scene, a.overrides);
+  const seiche::SceneDef scene = load_checked_scene(a.scene, a.overrides, a.resources);
   seiche::RunOptions o;
   o.frames = a.frames;
   o.threads = a.threads;
@@ -82,6 +130,8 @@ struct BakeArgs {
   int threads = 0;
   std::vector<std::string> overrides;
   std::string resume;  // a bake folder
+  bool accept_changed_inputs = false;
+  ResourceArgs resources;
 };
 
 // Ctrl-C and SIGTERM: the first asks the bake to stop after the current frame (with a
@@ -174,19 +224,28 @@ int bake_command(const BakeArgs& a) {
   if (resuming) {
     dir = a.resume;
     recipe = seiche::read_bake_recipe(dir);
-    scene = seiche::load_recipe_scene(recipe, dir / seiche::kBakeRecipeFile);
+    const std::filesystem::path recipe_file = dir / seiche::kBakeRecipeFile;
+    seiche::check_recorded_inputs_present(recipe.inputs, recipe_file);
+    const std::optional<std::uint64_t> max_memory = a.resources.max_memory_bytes();
+    g_stage = "loading " + recipe_file.string();
+    scene = seiche::load_recipe_scene(recipe, recipe_file);
+    seiche::check_inputs_unchanged(recipe.inputs, seiche::scene_input_files(scene), recipe_file,
+                                   a.accept_changed_inputs, &std::cerr);
+    recipe.inputs = seiche::scene_input_files(scene);  // as accepted: the next resume compares with these
+    seiche::check_scene_memory(scene, recipe_file.string(), max_memory);
+    seiche::check_scene_work(scene, recipe_file.string(), a.resources.allow_huge_work);
+    set_simulating_stage("resuming the bake of", scene);
   } else {
     std::optional<std::pair<int, int>> range;
     if (!a.frames.empty()) range = parse_frame_range(a.frames);
-    scene = a.scene.empty()
-                ? seiche::load_scene_text(seiche::default_scene_json(), "<default scene>", a.overrides)
-                : seiche::load_scene_file(a.scene, a.overrides);
+    scene = load_checked_scene(a.scene, a.overrides, a.resources);
     if (!range) range = std::pair{1, scene.output.frames};
     dir = a.out.empty() ? std::filesystem::path("out") / scene.name : std::filesystem::path(a.out);
     recipe = seiche::make_bake_recipe(scene.name, a.scene.empty() ? "<default scene>" : a.scene,
                                       a.scene.empty() ? std::string(seiche::default_scene_json()) : read_text(a.scene),
                                       a.overrides, range->first, range->second);
     recipe.scene_dir = scene.base_dir;
+    recipe.inputs = seiche::scene_input_files(scene);
   }
   const auto exporters = make_exporters(scene, resuming);
 
@@ -250,14 +309,16 @@ int main(int argc, char** argv) {
   run_cmd->add_option("--report", run.report, "Write a JSON run report to this file");
   run_cmd->add_option("--set", run.overrides,
                       "Override a scene value by its JSON path, e.g. --set solver.iterations=8");
+  add_resource_options(run_cmd, run.resources);
 
   BakeArgs bake;
   CLI::App* bake_cmd = app.add_subcommand(
       "bake", "Simulate a scene and write every output it asks for (.ply, .vdb, .obj), with checkpoints");
   bake_cmd->footer(
       "Stop at any time with Ctrl-C (or SIGTERM): the current frame is finished and checkpointed, and\n"
-      "`seiche bake --resume DIR` continues bit for bit. Exit codes: 0 done, 2 bad input, 3 output could\n"
-      "not be written, 4 the simulation diverged, 130 interrupted.");
+      "`seiche bake --resume DIR` continues bit for bit. bake.json fingerprints the scene's OBJ meshes: a resume\n"
+      "refuses one that is missing or changed (exit 2, naming it) unless --accept-changed-inputs is given.\n"
+      "Exit codes: 0 done, 2 bad input, 3 output could not be written, 4 the simulation diverged, 130 interrupted.");
   auto* bake_scene_opt = bake_cmd->add_option("scene", bake.scene, "Scene file (JSON); default: the built-in dam break");
   auto* bake_out_opt = bake_cmd->add_option("--out", bake.out, "Output folder (default: out/<scene name>)");
   auto* bake_frames_opt = bake_cmd->add_option(
@@ -272,6 +333,11 @@ int main(int argc, char** argv) {
       ->excludes(bake_out_opt)
       ->excludes(bake_frames_opt)
       ->excludes(bake_set_opt);
+  bake_cmd->add_flag("--accept-changed-inputs", bake.accept_changed_inputs,
+                     "With --resume: continue although an input file of the scene (an OBJ mesh) changed since the "
+                     "bake started (the frames after the checkpoint then use the file as it is now)")
+      ->needs("--resume");
+  add_resource_options(bake_cmd, bake.resources);
 
   seiche_cli::BenchArgs bench;
   CLI::App* bench_cmd = app.add_subcommand(
@@ -321,11 +387,17 @@ int main(int argc, char** argv) {
     return code == 0 ? 0 : kExitBadInput;
   }
 
+  ResourceArgs bench_resources;
+  add_resource_options(bench_cmd, bench_resources);
+
   try {
     if (*run_cmd) return run_command(run);
     if (*bake_cmd) return bake_command(bake);
     if (*bench_cmd) {
       bench.plot = !no_plot;
+      bench.max_memory = bench_resources.max_memory_bytes();
+      bench.allow_huge_work = bench_resources.allow_huge_work;
+      g_stage = "running the bench";
       return seiche_cli::bench_command(bench);
     }
   } catch (const seiche::SceneError& e) {
@@ -346,6 +418,9 @@ int main(int argc, char** argv) {
   } catch (const seiche::SimulationError& e) {
     std::cerr << "\nseiche: error: " << e.what() << "\n";
     return kExitDiverged;
+  } catch (const std::bad_alloc&) {
+    std::cerr << "\nseiche: error: out of memory while " << g_stage << "\n";
+    return 1;
   } catch (const std::exception& e) {
     std::cerr << "seiche: error: " << e.what() << "\n";
     return 1;

@@ -41,6 +41,8 @@ class AlignedColumn {
     size_ = n;
     data_.resize(padded_count(n), T{});
   }
+  /// Room for n elements (padded): a later resize(m <= n) does not reallocate.
+  void reserve(std::size_t n) { data_.reserve(padded_count(n)); }
   void clear_storage() {
     size_ = 0;
     data_ = {};

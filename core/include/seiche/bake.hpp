@@ -8,7 +8,8 @@
 //
 // Resuming: DIR/bake.json, written before the first frame, holds everything a resume needs
 // without the original files (the scene's text, the --set overrides, the frame range and the
-// Seiche version). DIR/checkpoint.bin holds the simulation state (checkpoint.hpp) and is
+// Seiche version), and the fingerprints of the files the scene refers to (its OBJ meshes,
+// input_fingerprint.hpp): a resume refuses a missing or changed one unless told to accept it. DIR/checkpoint.bin holds the simulation state (checkpoint.hpp) and is
 // replaced every output.checkpoint_every frames, on an interrupt and at the end; the rename is
 // atomic, so the previous checkpoint stays valid until the next one is complete. Per frame the
 // files come first and the checkpoint second: a checkpoint at frame c means frames up to c are
@@ -27,6 +28,7 @@
 
 #include "seiche/checkpoint.hpp"
 #include "seiche/frame_exporter.hpp"
+#include "seiche/input_fingerprint.hpp"
 #include "seiche/runner.hpp"
 #include "seiche/scene.hpp"
 
@@ -46,6 +48,9 @@ struct BakeRecipe {
   std::string scene_dir;
   std::string scene_json;              ///< the scene's text, as read
   std::vector<std::string> overrides;  ///< --set KEY=VALUE, applied on top of scene_json
+  /// The files the scene refers to (OBJ meshes), fingerprinted as the loader read them: a resume
+  /// checks them (check_recorded_inputs_present, check_inputs_unchanged).
+  std::vector<InputFile> inputs;
   int first_frame = 1;                 ///< frames first_frame..last_frame are written
   int last_frame = 1;
   /// The kernels' arithmetic of the build that started the bake (kernels::simd_info): builds

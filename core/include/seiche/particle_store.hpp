@@ -72,6 +72,10 @@ class ParticleStore {
   std::size_t size() const { return size_; }
   /// Resizes every enabled column; new particles are zero (w = 0: pinned until set).
   void resize(std::size_t n);
+  /// Room for n particles in every enabled column, and in those enabled or added later: the
+  /// families' resize() calls, one per family, then allocate each column once (std::vector
+  /// would grow it up to twice its final size).
+  void reserve(std::size_t n);
 
   /// Adds a column of element type T (float, std::uint32_t or std::int32_t), sized with the
   /// store and zero; the reference stays valid for the store's life. Throws
@@ -89,6 +93,7 @@ class ParticleStore {
   // The table comes first: the named members below are declared into it, in this order.
   std::deque<StoreColumn> columns_;
   std::size_t size_ = 0;
+  std::size_t reserved_ = 0;  ///< reserve()'s count (not carried by copies)
   /// The named column `name` of this table, appended when this store is being built (copies and
   /// moves find the one they carried).
   template <class T>

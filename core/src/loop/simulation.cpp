@@ -12,6 +12,7 @@
 #include "family_registry.hpp"
 #include "iteration_record.hpp"
 #include "seiche/kernels/blocked_reduce.hpp"
+#include "seiche/memory_estimate.hpp"
 
 namespace seiche {
 
@@ -37,6 +38,7 @@ void Simulation::create_families() {
         store_.px[k] = store_.x[k], store_.py[k] = store_.y[k], store_.pz[k] = store_.z[k];
     }
   };
+  store_.reserve(scene_particle_count(scene_));  // one allocation per column, not one per family
   run_rows(FamilyRow::Phase::Particles);
   move_into_domain();
   run_rows(FamilyRow::Phase::OnParticles);

@@ -11,6 +11,7 @@
 #include <fmt/ostream.h>
 
 #include <cerrno>
+#include <charconv>
 #include <chrono>
 #include <cstring>
 #include <fstream>
@@ -42,6 +43,23 @@ double seconds_since(Clock::time_point t) {
 }  // namespace
 
 // ---- bake.json -------------------------------------------------------------------------------
+
+namespace {
+
+// One entry of bake.json's "inputs" (encode_bake_recipe writes them).
+InputFile read_input_file(const nlohmann::json& entry) {
+  InputFile f;
+  f.json_path = entry.at("json_path").get<std::string>();
+  f.file = entry.at("file").get<std::string>();
+  f.bytes = entry.at("bytes").get<std::uint64_t>();
+  const std::string hash = entry.at("fnv1a64").get<std::string>();
+  const auto [end, ec] = std::from_chars(hash.data(), hash.data() + hash.size(), f.fnv1a64, 16);
+  if (ec != std::errc() || end != hash.data() + hash.size() || hash.size() != 16)
+    throw nlohmann::json::other_error::create(501, "inputs: fnv1a64 \"" + hash + "\" is not 16 hex digits", &entry);
+  return f;
+}
+
+}  // namespace
 
 std::uint64_t BakeRecipe::scene_fingerprint() const {
   std::uint64_t h = fnv1a64(scene_name);
@@ -84,6 +102,13 @@ std::string encode_bake_recipe(const BakeRecipe& r) {
   doc["family"] = r.family;
   doc["fused_multiply_add"] = r.fused_multiply_add;
   doc["simd"] = r.simd;
+  nlohmann::ordered_json inputs = nlohmann::ordered_json::array();
+  for (const InputFile& f : r.inputs)
+    inputs.push_back({{"json_path", f.json_path},
+                      {"file", f.file},
+                      {"bytes", f.bytes},
+                      {"fnv1a64", fmt::format("{:016x}", f.fnv1a64)}});
+  doc["inputs"] = std::move(inputs);
   doc["scene_fingerprint"] = fmt::format("{:016x}", r.scene_fingerprint());
   doc["scene"] = r.scene_json;
   return doc.dump(2) + "\n";
@@ -115,6 +140,8 @@ BakeRecipe read_bake_recipe(const fs::path& dir) {
     r.family = doc.at("family").get<std::string>();
     r.fused_multiply_add = doc.at("fused_multiply_add").get<bool>();
     r.simd = doc.at("simd").get<std::string>();
+    for (const nlohmann::json& f : doc.value("inputs", nlohmann::json::array()))
+      r.inputs.push_back(read_input_file(f));
     if (doc.at("scene_fingerprint").get<std::string>() !=
         fmt::format("{:016x}", r.scene_fingerprint()))
       throw ResumeError(

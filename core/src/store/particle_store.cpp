@@ -78,6 +78,7 @@ AlignedColumn<T>& ParticleStore::add_column(std::string name, ColumnKind kind) {
     throw std::invalid_argument("ParticleStore::add_column: a column '" + name + "' exists already");
   columns_.push_back({std::move(name), kind, true, AlignedColumn<T>()});
   auto& column = std::get<AlignedColumn<T>>(columns_.back().data);
+  column.reserve(std::max(reserved_, size_));
   column.resize(size_);
   return column;
 }
@@ -101,9 +102,16 @@ void ParticleStore::resize(std::size_t n) {
     if (c.enabled) std::visit([n](auto& column) { column.resize(n); }, c.data);
 }
 
+void ParticleStore::reserve(std::size_t n) {
+  reserved_ = n;
+  for (StoreColumn& c : columns_)
+    if (c.enabled) std::visit([n](auto& column) { column.reserve(n); }, c.data);
+}
+
 void ParticleStore::enable(FloatColumn& column) {
   for (StoreColumn& c : columns_)
     if (std::get_if<FloatColumn>(&c.data) == &column) c.enabled = true;
+  column.reserve(std::max(reserved_, size_));
   column.resize(size_);
 }
 

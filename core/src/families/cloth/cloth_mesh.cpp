@@ -30,6 +30,7 @@
 #include <string_view>
 #include <system_error>
 
+#include "seiche/checkpoint.hpp"
 #include "seiche/scene_loader.hpp"
 
 namespace seiche {
@@ -319,6 +320,8 @@ ClothMesh read_obj_mesh(const fs::path& obj_file, const ClothMeshDef& def,
   }
 
   ClothMesh mesh;
+  mesh.source_bytes = text.size();
+  mesh.source_fnv1a64 = fnv1a64(text);
 
   // Vertices, placed by x_world = x_file * scale + translate.
   const std::size_t vertex_count = attrib.vertices.size() / 3;

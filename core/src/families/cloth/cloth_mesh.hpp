@@ -28,6 +28,11 @@ struct ClothMesh {
 
   std::vector<std::string> warnings;  ///< e.g. "3 degenerate triangles skipped (faces 4, 9, 12)"
 
+  /// An OBJ mesh: the size and FNV-1a 64 hash of the bytes read_obj_mesh read, the input
+  /// fingerprint a bake records (input_fingerprint.hpp). 0 and 0 for a generated sheet.
+  std::uint64_t source_bytes = 0;
+  std::uint64_t source_fnv1a64 = 0;
+
   std::size_t vertex_count() const { return positions.size(); }
 };
 

@@ -12,6 +12,7 @@
 #include "cloth_mesh.hpp"
 #include "scene/output_name.hpp"
 #include "scene/shared_keys.hpp"
+#include "seiche/memory_estimate.hpp"
 
 namespace seiche::detail {
 
@@ -134,8 +135,11 @@ void read_cloth(JsonReader r, SceneDef& scene) {
 }
 
 // Every cloth's mesh is built here once and kept in the definition (mesh paths become absolute:
-// a resumed bake may run elsewhere).
+// a resumed bake may run elsewhere). First the whole scene's memory estimate: a sheet too large
+// for this machine (4096 x 4096 with self-collision: about 34 GiB) is refused with its estimate
+// here, before its mesh is built, not by std::bad_alloc (--max-memory is checked once loaded).
 void check_cloths(SceneDef& scene, const std::string& file) {
+  if (!scene.cloths.empty()) check_scene_memory(scene, file, std::nullopt);
   // Taken output stems, compared as output_name_key (equal ignoring case: the same files on a
   // case-folding file system), with who took them: the particle files, the fluid's .vdb / .obj
   // (named after the scene), the cloths before.
