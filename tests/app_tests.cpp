@@ -496,6 +496,21 @@ TEST(CliBake, VdbWithoutFluidWarnsAndWritesParticles) {
   EXPECT_TRUE(fs::exists(dir / "particles.0002.ply"));
 }
 
+TEST(CliBake, VoxelSizeErrorNamesTheSceneFile) {
+  // The exporter's check once named the scene ("scene \"small\"") instead of its file.
+  const std::string text = std::string(kBakeScene).replace(std::string(kBakeScene).find("\"vdb\": []"), 9,
+                                                           "\"vdb\": [\"density\"], \"voxel_size\": 1");
+  const fs::path scene = write_scene("coarse_voxels.json", text);
+  const fs::path out = fresh_dir("bake_coarse_voxels");
+  const Result r = seiche("bake " + q(scene) + " --frames 1 --out " + q(out));
+  EXPECT_EQ(r.code, 2) << r.err;
+  if (r.err.find("-DSEICHE_WITH_OPENVDB=ON") != std::string::npos) GTEST_SKIP() << "built without OpenVDB";
+  EXPECT_NE(r.err.find(scene.string() + ": output.voxel_size: 1 m is coarser than the fluid spacing"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(out / "bake.json"));
+}
+
 TEST(CliBake, VdbOutputNeedsOpenVdbAndResumesToTheSameBytes) {
   // The scene's default output asks for surface and density grids.
   const std::string text = std::string(kBakeScene).replace(std::string(kBakeScene).find("\"vdb\": []"), 9,

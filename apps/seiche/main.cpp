@@ -156,8 +156,10 @@ std::pair<int, int> parse_frame_range(const std::string& text) {
 }
 
 // The exporters of the scene, besides the PLY the bake writes itself: the families' (every
-// cloth's OBJ), and the fluid's .vdb and mesh that the output section asks for.
-std::vector<std::unique_ptr<seiche::FrameExporter>> make_exporters(const seiche::SceneDef& scene, bool resuming) {
+// cloth's OBJ), and the fluid's .vdb and mesh that the output section asks for. `source` is the
+// file the scene came from (the scene file, or bake.json on a resume), named by export errors.
+std::vector<std::unique_ptr<seiche::FrameExporter>> make_exporters(const seiche::SceneDef& scene, bool resuming,
+                                                                   const std::string& source) {
   std::vector<std::unique_ptr<seiche::FrameExporter>> exporters = seiche::family_exporters(scene);
   const seiche::OutputDef& o = scene.output;
   if (!o.any_vdb() && !o.mesh) return exporters;
@@ -173,8 +175,13 @@ std::vector<std::unique_ptr<seiche::FrameExporter>> make_exporters(const seiche:
     return exporters;
   }
 #ifdef SEICHE_HAS_OPENVDB
-  if (auto e = seiche::make_vdb_exporter(scene)) exporters.push_back(std::move(e));
+  try {
+    if (auto e = seiche::make_vdb_exporter(scene)) exporters.push_back(std::move(e));
+  } catch (const seiche::SceneError& e) {  // the exporter knows the scene, not its file
+    throw seiche::SceneError(source, e.json_path(), e.problem());
+  }
 #else
+  (void)source;
   throw UsageError(fmt::format(
       "the scene asks for {}, but this seiche was built without OpenVDB: rebuild with -DSEICHE_WITH_OPENVDB=ON{}",
       what, resuming ? "" : ", or bake particles only with --set output.vdb=[] --set output.mesh=false"));
@@ -213,7 +220,8 @@ int bake_command(const BakeArgs& a) {
                                       a.overrides, range->first, range->second);
     recipe.scene_dir = scene.base_dir;
   }
-  const auto exporters = make_exporters(scene, resuming);
+  const auto exporters =
+      make_exporters(scene, resuming, resuming ? (dir / seiche::kBakeRecipeFile).string() : recipe.scene_source);
 
   seiche::BakeOptions o;
   o.out_dir = dir;
