@@ -55,7 +55,8 @@ const KeyTable<SolverDef>& solver_keys() {
                "paper's 0.1, which made colliding fluid gain energy at 1/480 s (docs/design.md)"),
       K("tensile_n", &SolverDef::tensile_n, Range::closed(1, 8)).doc("the exponent n of s_corr"),
       K("tensile_dq", &SolverDef::tensile_dq, Range::open(0, 1))
-          .doc("dq of s_corr as a fraction of the kernel radius h"),
+          .doc("dq of s_corr as a fraction of the kernel radius h; from dq·h ≥ the fluid spacing on "
+               "(dq ≥ 1 / `kernel_radius`) there is no artificial pressure"),
   };
   return keys;
 }

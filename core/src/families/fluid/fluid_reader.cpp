@@ -34,7 +34,9 @@ const KeyTable<FluidDef>& fluid_keys() {
       K("kernel_radius", &FluidDef::kernel_radius, Range::closed(kMinKernelRadius, kMaxKernelRadius))
           .unit("spacings")
           .doc("SPH smoothing radius h, in units of `spacing` (2: about 30 neighbors)"),
-      K("rest_density", &FluidDef::rest_density, Range::left_open(0, kMaxRestDensity)).unit("kg/m³").doc("rest density ρ₀"),
+      K("rest_density", &FluidDef::rest_density, Range::left_open(0, kMaxRestDensity))
+          .unit("kg/m³")
+          .doc("rest density ρ₀"),
       K("viscosity", &FluidDef::viscosity, Range::closed(0, 1))
           .doc("XSPH viscosity coefficient c; 0 = off"),
       K("vorticity", &FluidDef::vorticity, Range::closed(0, kMaxVorticity))
