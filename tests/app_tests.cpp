@@ -171,6 +171,27 @@ TEST(Cli, BadCommandLineIsBadInput) {
   EXPECT_EQ(seiche("fly").code, 2);
 }
 
+TEST(Cli, RangeErrorsAreShortAndAnUnknownSubcommandIsNamed) {
+  // CLI11's own validator printed the largest double in full ("not in range 0.000000 to
+  // 179769313486...", 309 digits).
+  Result r = seiche("run --frames -5");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--frames: must be a number > 0, got -5"), std::string::npos) << r.err;
+  r = seiche("bench --threads -1e300");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--threads: must be a number > 0, got -1e300"), std::string::npos) << r.err;
+  EXPECT_LT(r.err.size(), 200u) << r.err;
+  EXPECT_EQ(r.err.find("179769"), std::string::npos) << r.err;
+  // "A subcommand is required" said nothing about the word that was not one.
+  r = seiche("fly --frames 2");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("unknown subcommand 'fly'; the subcommands are run, bake, bench"), std::string::npos)
+      << r.err;
+  r = seiche("");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("A subcommand is required"), std::string::npos) << r.err;  // none given at all
+}
+
 TEST(Cli, UnwritableOutputIsExitCode3) {
   const fs::path scene = write_scene("io.json", kValid);
   const Result r = seiche("run '" + scene.string() + "' --frames 1 --out /dev/null/seiche");
@@ -489,6 +510,21 @@ TEST(CliBake, VdbWithoutFluidWarnsAndWritesParticles) {
             std::string::npos)
       << r.err;
   EXPECT_TRUE(fs::exists(dir / "particles.0002.ply"));
+}
+
+TEST(CliBake, VoxelSizeErrorNamesTheSceneFile) {
+  // The exporter's check once named the scene ("scene \"small\"") instead of its file.
+  const std::string text = std::string(kBakeScene).replace(std::string(kBakeScene).find("\"vdb\": []"), 9,
+                                                           "\"vdb\": [\"density\"], \"voxel_size\": 1");
+  const fs::path scene = write_scene("coarse_voxels.json", text);
+  const fs::path out = fresh_dir("bake_coarse_voxels");
+  const Result r = seiche("bake " + q(scene) + " --frames 1 --out " + q(out));
+  EXPECT_EQ(r.code, 2) << r.err;
+  if (r.err.find("-DSEICHE_WITH_OPENVDB=ON") != std::string::npos) GTEST_SKIP() << "built without OpenVDB";
+  EXPECT_NE(r.err.find(scene.string() + ": output.voxel_size: 1 m is coarser than the fluid spacing"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(out / "bake.json"));
 }
 
 TEST(CliBake, VdbOutputNeedsOpenVdbAndResumesToTheSameBytes) {

@@ -10,6 +10,7 @@
 #include <fstream>
 #include <map>
 #include <sstream>
+#include <tuple>
 
 #include "seiche/bake.hpp"
 #include "seiche/kernels/simd_info.hpp"
@@ -461,6 +462,38 @@ TEST(BakeRecipe, RoundTripsAndDetectsEdits) {
     EXPECT_NE(std::string(e.what()).find("bake.json"), std::string::npos) << e.what();
   }
   EXPECT_THROW(read_bake_recipe(dir / "missing"), ResumeError);
+}
+
+// A frame number must be a whole number in int's range: 2.5 once became 2, and 1e10 went through
+// an out-of-range double-to-int conversion (undefined behaviour).
+TEST(BakeRecipe, RefusesFrameNumbersThatAreNotWholeOrOutOfRange) {
+  const fs::path dir = fresh_dir("recipe_frames");
+  const std::string good = encode_bake_recipe(mixed_recipe(2, 9));
+  ASSERT_NE(good.find("\"last_frame\": 9"), std::string::npos) << good;
+  for (const auto& [key, from, to] :
+       {std::tuple{"first_frame", "\"first_frame\": 2", "\"first_frame\": 2.5"},
+        std::tuple{"last_frame", "\"last_frame\": 9", "\"last_frame\": 1e10"},
+        std::tuple{"last_frame", "\"last_frame\": 9", "\"last_frame\": 10000000000"},
+        std::tuple{"first_frame", "\"first_frame\": 2", "\"first_frame\": -3"},
+        std::tuple{"first_frame", "\"first_frame\": 2", "\"first_frame\": \"2\""}}) {
+    std::string text = good;
+    text.replace(text.find(from), std::string(from).size(), to);
+    write_bytes(dir / kBakeRecipeFile, text);
+    try {
+      read_bake_recipe(dir);
+      ADD_FAILURE() << to << " was accepted";
+    } catch (const ResumeError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("bake.json"), std::string::npos) << what;
+      EXPECT_NE(what.find(std::string(key) + " must be a whole number in [1, 2147483647]"), std::string::npos)
+          << what;
+    }
+  }
+  // Written as 9.0 it is still frame 9.
+  std::string text = good;
+  text.replace(text.find("\"last_frame\": 9"), 15, "\"last_frame\": 9.0");
+  write_bytes(dir / kBakeRecipeFile, text);
+  EXPECT_EQ(read_bake_recipe(dir).last_frame, 9);
 }
 
 // A bake started by a build whose multiply-adds round differently (fused against the x86-64

@@ -678,7 +678,7 @@ TEST(MeshSdf, CubeIsTheBoxDistanceEverywhere) {
   const ClothMesh cube = read(kMeshes / "cube.obj");
   MeshSdf sdf;
   const float voxel = 1.0f / 32.0f, band = 0.25f;
-  build_mesh_sdf(cube, voxel, band, "scene.json", "colliders[0]", sdf);
+  build_mesh_sdf(cube, voxel, band, "scene.json", "colliders[0].mesh", sdf);
   const kernels::SdfGrid& g = sdf.grid;
   EXPECT_EQ(g.values, sdf.values.data());
   EXPECT_EQ(g.voxel, voxel);
@@ -714,7 +714,7 @@ TEST(MeshSdf, IcosphereIsTheSphereDistanceUpToTheMeshError) {
   ASSERT_LT(hausdorff, 0.02);
   MeshSdf sdf;
   const float voxel = 1.0f / 24.0f;
-  build_mesh_sdf(sphere, voxel, 0.2f, "scene.json", "colliders[0]", sdf);
+  build_mesh_sdf(sphere, voxel, 0.2f, "scene.json", "colliders[0].mesh", sdf);
 
   // At the samples: exact distances to the polyhedron, so within the Hausdorff distance.
   double worst = 0.0;
@@ -802,7 +802,7 @@ TEST(MeshSdf, TorusMatchesBruteForceAndItsHoleIsOutside) {
   const ClothMesh m = torus(R, r, 24, 12);
   MeshSdf sdf;
   const float voxel = 0.05f;
-  build_mesh_sdf(m, voxel, 0.15f, "scene.json", "colliders[0]", sdf);
+  build_mesh_sdf(m, voxel, 0.15f, "scene.json", "colliders[0].mesh", sdf);
   // Deviation of the mesh from the smooth torus (its vertices lie on it): bounded by the
   // analytic distance of the triangle centroids, with a margin.
   double deviation = 0.0;
@@ -892,20 +892,27 @@ TEST(MeshSdf, OverlappingShellsAreInside) {
 TEST(MeshSdf, OpenMeshIsRejected) {
   const ClothMesh open = read(kData / "open_box.obj");
   MeshSdf sdf;
-  const auto e = error_of([&] { build_mesh_sdf(open, 0.05f, 0.1f, "scene.json", "colliders[3]", sdf); });
+  const auto e = error_of([&] { build_mesh_sdf(open, 0.05f, 0.1f, "scene.json", "colliders[3].mesh", sdf); });
   ASSERT_TRUE(e);
   EXPECT_EQ(e->file(), "scene.json");
-  EXPECT_EQ(e->json_path(), "colliders[3]");
+  EXPECT_EQ(e->json_path(), "colliders[3].mesh.file");  // a problem of the mesh: its file
   EXPECT_TRUE(contains(e->problem(), "closed")) << e->problem();
   EXPECT_TRUE(contains(e->problem(), "vertices 3 and 4 (1-based) belongs to 1 triangle")) << e->problem();
   EXPECT_TRUE(contains(e->problem(), "4 such edges")) << e->problem();
   // A cloth sheet is open too.
   const ClothMesh sheet_mesh = make_sheet(sheet(3, 3), "s", "s");
-  EXPECT_TRUE(error_of([&] { build_mesh_sdf(sheet_mesh, 0.05f, 0.1f, "scene.json", "colliders[3]", sdf); }));
-  // A non-positive voxel is an error, not a huge allocation.
+  EXPECT_TRUE(error_of([&] { build_mesh_sdf(sheet_mesh, 0.05f, 0.1f, "scene.json", "colliders[3].mesh", sdf); }));
+  // A non-positive voxel is an error, not a huge allocation; so is a field of more than 2^26
+  // samples. Both are problems of the voxel size, and name it (the size error once named the file).
   const ClothMesh cube = read(kMeshes / "cube.obj");
-  EXPECT_TRUE(error_of([&] { build_mesh_sdf(cube, 0.0f, 0.1f, "scene.json", "colliders[3]", sdf); }));
-  EXPECT_TRUE(error_of([&] { build_mesh_sdf(cube, 1e-5f, 0.1f, "scene.json", "colliders[3]", sdf); }));
+  for (float voxel : {0.0f, 1e-5f}) {
+    const auto v = error_of([&] { build_mesh_sdf(cube, voxel, 0.1f, "scene.json", "colliders[3].mesh", sdf); });
+    ASSERT_TRUE(v) << voxel;
+    EXPECT_EQ(v->json_path(), "colliders[3].mesh.voxel_size") << v->problem();
+  }
+  EXPECT_TRUE(contains(error_of([&] { build_mesh_sdf(cube, 1e-5f, 0.1f, "scene.json", "colliders[3].mesh", sdf); })
+                           ->problem(),
+                       "too small for this mesh"));
 }
 
 // The reader drops the zero-area face of this closed tetrahedron; the field still takes the mesh

@@ -185,9 +185,12 @@ void expect_golden(const Golden& g) {
 // every frame, by the AVX2 build (-mno-avx512f, 8 lanes); the unfused ones by the x86-64
 // baseline build (SSE2, 4 lanes) and, the same bits, by an AVX2 build without FMA (-mno-fma).
 // Scenes as shipped, frames from 1, the default thread count (any other gives the same bits,
-// tested above).
+// tested above). The dam break's values were recomputed after the artificial-pressure shift
+// (issue 15): fused by the native AVX-512 build, unfused by the x86-64 build and, the same bits,
+// by an AVX build without FMA (-DSEICHE_MARCH=sandybridge); the fused value is reproduced by the
+// AVX2 build (-DSEICHE_MARCH=haswell, 8 lanes).
 TEST(Golden, DamBreakAfter50Frames) {
-  expect_golden({"dam_break.json", 50, 0x908b4bf723248a8aull, 0x773b2e81be00c088ull});
+  expect_golden({"dam_break.json", 50, 0x73d3dd10ba9b72abull, 0x20c4d2a4f1b277f7ull});
 }
 TEST(Golden, ClothDrapeAfter120Frames) {
   expect_golden({"cloth_drape.json", 120, 0x4af5f6b5c0fce5e9ull, 0x8d3789424195aff1ull});

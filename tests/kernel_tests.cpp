@@ -78,6 +78,7 @@ PbfParams fluid_params(float spacing) {
   prm.epsilon = float(0.01 * lattice_lambda_denominator(spacing, prm.h));
   prm.lambda_scale = float(1.0 / lattice_lambda_denominator(spacing, prm.h));
   prm.tensile_k = 0.1f;
+  prm.tensile_rest_distance = spacing;
   return prm;
 }
 
@@ -414,6 +415,34 @@ TEST(Pbf, RaggedAndEmptyNeighborListsMatchScalarReference) {
     EXPECT_EQ(r.lambda[i], 0.0f);  // no neighbors: no constraint, no motion
     EXPECT_EQ(r.px[i], 1.0f);
   }
+}
+
+TEST(Pbf, ArtificialPressurePushesOnlyPairsCloserThanTheRestSpacing) {
+  // Two particles without density error (lambda 0): only s_corr moves them. At and beyond the
+  // rest spacing it is exactly 0; closer, it pushes them apart, symmetrically; without a rest
+  // distance (the paper's term) it pushes at the rest spacing too.
+  const float s = 0.1f;
+  auto push = [&](float r, float rest_distance) {
+    PbfParams prm = fluid_params(s);
+    prm.tensile_rest_distance = rest_distance;
+    std::vector<Float4> pos = {{0.0f, 0.0f, 0.0f, 0.0f}, {r, 0.0f, 0.0f, 0.0f}};
+    const BruteNeighbors nb(pos, prm.h);
+    std::vector<float> px = {0.0f, r}, py(2, 0.0f), pz(2, 0.0f), rx = px, ry = py, rz = pz;
+    pbf_apply_correction(pos.data(), nb.span(), 2, prm, px.data(), py.data(), pz.data());
+    pbf_apply_correction_reference(pos.data(), nb.span(), 2, prm, rx.data(), ry.data(), rz.data());
+    EXPECT_NEAR(px[0], rx[0], 1e-4 * std::abs(rx[0]) + 1e-12) << r;
+    EXPECT_NEAR(px[0], -(px[1] - r), 1e-7f) << r;  // equal and opposite (up to rounding r + dp)
+    EXPECT_EQ(py[0], 0.0f);
+    return -px[0];  // how far particle 0 moved away from particle 1
+  };
+  EXPECT_EQ(push(s, s), 0.0f);
+  EXPECT_EQ(push(1.3f * s, s), 0.0f);
+  EXPECT_GT(push(0.9f * s, s), 0.0f);
+  EXPECT_GT(push(0.5f * s, s), push(0.9f * s, s));
+  EXPECT_GT(push(s, 0.0f), 0.0f);  // the unshifted term pushes at the rest spacing
+  // At r = dq h the shifted term, rescaled, is the paper's k: the same push as the unshifted one.
+  const float dq_h = fluid_params(s).tensile_dq * fluid_params(s).h;
+  EXPECT_NEAR(push(dq_h, s), push(dq_h, 0.0f), 1e-5 * push(dq_h, 0.0f));
 }
 
 TEST(Pbf, JacobiIterationsReduceCompression) {

@@ -343,6 +343,26 @@ TEST(SceneLoader, BoundaryValuesAreAccepted) {
   EXPECT_EQ(s.particles[0].x, (Vec3{1.0f, 1.0f, 1.0f}));  // on the domain's corner: inside
 }
 
+TEST(SceneLoader, UpperBoundsAndTheSmallestMassAreAccepted) {
+  // The documented bounds themselves are valid: mass 1e-12 (read as a float, 9.9999998e-13, it
+  // was once refused as "at least 1e-12, got 1e-12") and each upper bound.
+  const SceneDef s = load(R"({
+    "solver": {"frame_dt": 10, "tensile_k": 1},
+    "fluids": [{"box": {"min": [0, 0, 0], "max": [0.02, 0.02, 0.02]}, "rest_density": 1e5, "vorticity": 100}],
+    "particles": [{"x": [1, 1, 1], "mass": 1e-12}, {"x": [0, 0, 0], "mass": 1e-12}],
+    "distance_constraints": [{"i": 0, "j": 1, "compliance": 1e8}],
+    "cloths": [{"sheet": {"origin": [0.5, 0.5, 0.5], "size": [0.1, 0.1], "resolution": [2, 2]},
+                "thickness": 1, "stretch_compliance": 1e8, "bend_compliance": 1e8}]})");
+  EXPECT_EQ(s.particles[0].mass, 1e-12f);
+  EXPECT_TRUE(std::isfinite(1.0f / s.particles[0].mass));  // why the bound is there
+  EXPECT_EQ(s.solver.frame_dt, 10.0);
+  EXPECT_EQ(s.fluids[0].rest_density, 1e5f);
+  EXPECT_EQ(s.cloths[0].bend_compliance, 1e8f);
+  EXPECT_EQ(s.distance_constraints[0].compliance, 1e8f);
+  // Just below the smallest mass is still refused.
+  EXPECT_THROW(load(R"({"particles": [{"x": [0, 0, 0], "mass": 9.9e-13}]})"), SceneError);
+}
+
 // ---- Name ------------------------------------------------------------------------------------
 
 TEST(SceneLoader, NameComesFromTheDocumentOrFileStem) {
@@ -542,8 +562,8 @@ const BadCase kBadCases[] = {
     {"FloatOverflow", R"({"domain": {"friction": 1e39}})", "domain.friction", "not finite as a 32-bit float"},
     {"VecElementOverflow", R"({"solver": {"gravity": [0, -1e39, 0]}})", "solver.gravity[1]", "not finite"},
     // Ranges: solver
-    {"FrameDtZero", R"({"solver": {"frame_dt": 0}})", "solver.frame_dt", "must be > 0, got 0"},
-    {"FrameDtNegative", R"({"solver": {"frame_dt": -0.01}})", "solver.frame_dt", "must be > 0"},
+    {"FrameDtZero", R"({"solver": {"frame_dt": 0}})", "solver.frame_dt", "must be in (0, 10], got 0"},
+    {"FrameDtNegative", R"({"solver": {"frame_dt": -0.01}})", "solver.frame_dt", "must be in (0, 10]"},
     {"SubstepsZero", R"({"solver": {"substeps": 0}})", "solver.substeps", "must be in [1, 10000], got 0"},
     {"SubstepsHuge", R"({"solver": {"substeps": 10001}})", "solver.substeps", "must be in [1, 10000]"},
     {"IterationsZero", R"({"solver": {"iterations": 0}})", "solver.iterations", "must be in [1, 10000]"},
@@ -553,7 +573,24 @@ const BadCase kBadCases[] = {
     {"DensityToleranceOne", R"({"solver": {"density_tolerance": 1}})", "solver.density_tolerance", "must be in [0, 1)"},
     {"MaxIterationsZero", R"({"solver": {"max_iterations": 0}})", "solver.max_iterations", "must be in [1, 10000]"},
     {"RelaxationNegative", R"({"solver": {"relaxation": -0.5}})", "solver.relaxation", "must be >= 0, got -0.5"},
-    {"TensileKNegative", R"({"solver": {"tensile_k": -0.1}})", "solver.tensile_k", "must be >= 0"},
+    {"TensileKNegative", R"({"solver": {"tensile_k": -0.1}})", "solver.tensile_k", "must be in [0, 1]"},
+    // Upper bounds: values past them passed once and gave NaN in frame 1
+    {"FrameDtHuge", R"({"solver": {"frame_dt": 1e39}})", "solver.frame_dt", "must be in (0, 10], got 1e+39"},
+    {"FrameDtAboveTen", R"({"solver": {"frame_dt": 10.5}})", "solver.frame_dt", "must be in (0, 10], got 10.5"},
+    {"TensileKHuge", R"({"solver": {"tensile_k": 3e38}})", "solver.tensile_k", "must be in [0, 1], got 3e+38"},
+    {"RestDensityHuge", R"({"fluids": [{)" FLUID_BOX R"(, "rest_density": 3e38}]})", "fluids[0].rest_density",
+     "must be in (0, 100000], got 3e+38"},
+    {"VorticityHuge", R"({"fluids": [{)" FLUID_BOX R"(, "vorticity": 3e38}]})", "fluids[0].vorticity",
+     "must be in [0, 100], got 3e+38"},
+    {"ConstraintComplianceHuge",
+     "{" TWO_PARTICLES R"(, "distance_constraints": [{"i": 0, "j": 1, "compliance": 3e38}]})",
+     "distance_constraints[0].compliance", "must be in [0, 100000000], got 3e+38"},
+    {"ClothThicknessHuge", R"({"cloths": [{"sheet": {"origin": [0.5, 0.5, 0.5], "size": [0.1, 0.1], "resolution": [2, 2]}, "thickness": 3e38}]})", "cloths[0].thickness",
+     "must be in (0, 1], got 3e+38"},
+    {"ClothStretchComplianceHuge", R"({"cloths": [{"sheet": {"origin": [0.5, 0.5, 0.5], "size": [0.1, 0.1], "resolution": [2, 2]}, "stretch_compliance": 3e38}]})",
+     "cloths[0].stretch_compliance", "must be in [0, 100000000], got 3e+38"},
+    {"ClothBendComplianceHuge", R"({"cloths": [{"sheet": {"origin": [0.5, 0.5, 0.5], "size": [0.1, 0.1], "resolution": [2, 2]}, "bend_compliance": 3e38}]})", "cloths[0].bend_compliance",
+     "must be in (0, 100000000], got 3e+38"},
     {"TensileNBelowOne", R"({"solver": {"tensile_n": 0}})", "solver.tensile_n", "must be in [1, 8]"},
     {"TensileNNotInteger", R"({"solver": {"tensile_n": 2.5}})", "solver.tensile_n", "integer"},
     {"TensileDqZero", R"({"solver": {"tensile_dq": 0}})", "solver.tensile_dq", "must be in (0, 1)"},
@@ -598,13 +635,13 @@ const BadCase kBadCases[] = {
     {"SubnormalMass", R"({"particles": [{"x": [0,0,0], "mass": 1e-40}]})", "particles[0].mass",
      "must be 0 (pinned) or at least"},
     {"RestDensityZero", R"({"fluids": [{)" FLUID_BOX R"(, "rest_density": 0}]})", "fluids[0].rest_density",
-     "must be > 0"},
+     "must be in (0, 100000]"},
     {"ViscosityAboveOne", R"({"fluids": [{)" FLUID_BOX R"(, "viscosity": 1.5}]})", "fluids[0].viscosity",
      "must be in [0, 1], got 1.5"},
     {"ViscosityNegative", R"({"fluids": [{)" FLUID_BOX R"(, "viscosity": -0.01}]})", "fluids[0].viscosity",
      "must be in [0, 1]"},
     {"VorticityNegative", R"({"fluids": [{)" FLUID_BOX R"(, "vorticity": -1}]})", "fluids[0].vorticity",
-     "must be >= 0"},
+     "must be in [0, 100]"},
     {"FluidTooManyParticles", R"({"fluids": [{)" FLUID_BOX R"(, "spacing": 0.001}]})", "fluids[0].box",
      "would hold 125000000 particles"},
     {"FluidNoParticles", R"({"fluids": [{"box": {"min": [0, 0, 0], "max": [1, 0.01, 1]}}]})", "fluids[0].box",
@@ -647,7 +684,7 @@ const BadCase kBadCases[] = {
      "distance_constraints[0].rest_length", "must be >= 0, got -1"},
     {"ConstraintNegativeCompliance",
      "{" TWO_PARTICLES R"(, "distance_constraints": [{"i": 0, "j": 1, "compliance": -1e-6}]})",
-     "distance_constraints[0].compliance", "must be >= 0"},
+     "distance_constraints[0].compliance", "must be in [0, 100000000]"},
     {"ConstraintIndexNotInteger", "{" TWO_PARTICLES R"(, "distance_constraints": [{"i": 0.5, "j": 1}]})",
      "distance_constraints[0].i", "expected an integer"},
     // Colliders

@@ -51,15 +51,15 @@ TEST_P(StabilitySuite, CasePassesAtReducedSize) {
   EXPECT_LT(r.final_error, r.error_bound);
 }
 
-INSTANTIATE_TEST_SUITE_P(Reduced, StabilitySuite, ::testing::Range<std::size_t>(0, 8),
+INSTANTIATE_TEST_SUITE_P(Reduced, StabilitySuite, ::testing::Range<std::size_t>(0, 9),
                          [](const ::testing::TestParamInfo<std::size_t>& info) {
                            return stability_cases(SuiteSize::Reduced)[info.param].name;
                          });
 
-TEST(StabilityJudge, TheSuiteHasTheEightCasesAtBothSizes) {
+TEST(StabilityJudge, TheSuiteHasTheNineCasesAtBothSizes) {
   const auto full = stability_cases(SuiteSize::Full), reduced = stability_cases(SuiteSize::Reduced);
-  ASSERT_EQ(full.size(), 8u);
-  ASSERT_EQ(reduced.size(), 8u);
+  ASSERT_EQ(full.size(), 9u);
+  ASSERT_EQ(reduced.size(), 9u);
   for (std::size_t k = 0; k < full.size(); ++k) {
     EXPECT_EQ(full[k].name, reduced[k].name);
     EXPECT_EQ(full[k].duration, reduced[k].duration);  // the same simulated time
@@ -155,4 +155,19 @@ TEST(FluidSafeguards, ArtificialPressureIsTheSameForceAtMoreSubsteps) {
     const StabilityResult r = run_stability_case(c, 0);
     EXPECT_TRUE(r.passed) << substeps << " substeps: " << r.failure;
   }
+}
+
+TEST(FluidSafeguards, ArtificialPressurePushesNoPairBeyondTheRestSpacing) {
+  // A 6^3 block at spacing 0.05 m: nearly every particle is within a kernel radius of the free
+  // surface. The paper's s_corr, still pushing at the rest spacing, lifted it (+21 % energy by
+  // frame 6); s_corr shifted to 0 at the rest spacing does not, and neither does k = 0.
+  StabilityCase c = reduced_case("fluid_coarse_block");
+  ASSERT_EQ(c.scene.solver.tensile_k, 0.05f);  // the default
+  ASSERT_EQ(c.scene.fluids[0].spacing, 0.05f);
+  const StabilityResult r = run_stability_case(c, 0);
+  EXPECT_TRUE(r.passed) << r.failure;
+  EXPECT_LE(r.energy_max, r.energy_start);  // it only falls: no gain at all
+  c.scene.solver.tensile_k = 0.0f;
+  const StabilityResult without = run_stability_case(c, 0);
+  EXPECT_TRUE(without.passed) << without.failure;
 }

@@ -24,6 +24,7 @@
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <unistd.h>
 
 #include "bench_command.hpp"
@@ -45,6 +46,30 @@ constexpr int kExitBadInput = 2;
 constexpr int kExitIo = 3;
 constexpr int kExitDiverged = 4;
 constexpr int kExitInterrupted = 130;  // 128 + SIGINT, what shells report for Ctrl-C
+
+/// CLI11's PositiveNumber says "Value -5 not in range 0.000000 to 1797693...": the largest double
+/// in 309 digits. This one says what is wrong in a few words (runs on the text, before conversion).
+const CLI::Validator kPositiveNumber(
+    [](std::string& text) -> std::string {
+      double value = 0.0;
+      if (CLI::detail::lexical_cast(text, value) && value > 0.0) return {};
+      return fmt::format("must be a number > 0, got {}", text.size() > 40 ? text.substr(0, 40) + "..." : text);
+    },
+    "POSITIVE");
+
+/// CLI11 answers an unknown first word with "A subcommand is required": name it and the
+/// subcommands instead. Returns the message, or nothing when the first argument is an option or
+/// a subcommand.
+std::optional<std::string> unknown_subcommand(CLI::App& app, int argc, char** argv) {
+  if (argc < 2 || argv[1][0] == '-') return std::nullopt;
+  const std::string word = argv[1];
+  std::vector<std::string> names;
+  for (const CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
+    if (sub->check_name(word)) return std::nullopt;
+    names.push_back(sub->get_name());
+  }
+  return fmt::format("unknown subcommand '{}'; the subcommands are {}", word, fmt::join(names, ", "));
+}
 
 /// Bad command-line input that is not a scene error (a frame range, a missing OpenVDB).
 class UsageError : public std::runtime_error {
@@ -181,8 +206,10 @@ std::pair<int, int> parse_frame_range(const std::string& text) {
 }
 
 // The exporters of the scene, besides the PLY the bake writes itself: the families' (every
-// cloth's OBJ), and the fluid's .vdb and mesh that the output section asks for.
-std::vector<std::unique_ptr<seiche::FrameExporter>> make_exporters(const seiche::SceneDef& scene, bool resuming) {
+// cloth's OBJ), and the fluid's .vdb and mesh that the output section asks for. `source` is the
+// file the scene came from (the scene file, or bake.json on a resume), named by export errors.
+std::vector<std::unique_ptr<seiche::FrameExporter>> make_exporters(const seiche::SceneDef& scene, bool resuming,
+                                                                   const std::string& source) {
   std::vector<std::unique_ptr<seiche::FrameExporter>> exporters = seiche::family_exporters(scene);
   const seiche::OutputDef& o = scene.output;
   if (!o.any_vdb() && !o.mesh) return exporters;
@@ -198,8 +225,13 @@ std::vector<std::unique_ptr<seiche::FrameExporter>> make_exporters(const seiche:
     return exporters;
   }
 #ifdef SEICHE_HAS_OPENVDB
-  if (auto e = seiche::make_vdb_exporter(scene)) exporters.push_back(std::move(e));
+  try {
+    if (auto e = seiche::make_vdb_exporter(scene)) exporters.push_back(std::move(e));
+  } catch (const seiche::SceneError& e) {  // the exporter knows the scene, not its file
+    throw seiche::SceneError(source, e.json_path(), e.problem());
+  }
 #else
+  (void)source;
   throw UsageError(fmt::format(
       "the scene asks for {}, but this seiche was built without OpenVDB: rebuild with -DSEICHE_WITH_OPENVDB=ON{}",
       what, resuming ? "" : ", or bake particles only with --set output.vdb=[] --set output.mesh=false"));
@@ -247,7 +279,8 @@ int bake_command(const BakeArgs& a) {
     recipe.scene_dir = scene.base_dir;
     recipe.inputs = seiche::scene_input_files(scene);
   }
-  const auto exporters = make_exporters(scene, resuming);
+  const auto exporters =
+      make_exporters(scene, resuming, resuming ? (dir / seiche::kBakeRecipeFile).string() : recipe.scene_source);
 
   seiche::BakeOptions o;
   o.out_dir = dir;
@@ -302,10 +335,10 @@ int main(int argc, char** argv) {
   CLI::App* run_cmd = app.add_subcommand("run", "Simulate a scene and write particle frames");
   run_cmd->add_option("scene", run.scene, "Scene file (JSON); default: the built-in dam break");
   run_cmd->add_option("--frames", run.frames, "Number of frames (default: the scene's output.frames)")
-      ->check(CLI::PositiveNumber);
+      ->check(kPositiveNumber);
   run_cmd->add_option("--out", run.out, "Output folder (default: out/<scene name>)");
   run_cmd->add_option("--threads", run.threads, "Worker threads (default: all cores)")
-      ->check(CLI::PositiveNumber);
+      ->check(kPositiveNumber);
   run_cmd->add_option("--report", run.report, "Write a JSON run report to this file");
   run_cmd->add_option("--set", run.overrides,
                       "Override a scene value by its JSON path, e.g. --set solver.iterations=8");
@@ -323,7 +356,7 @@ int main(int argc, char** argv) {
   auto* bake_out_opt = bake_cmd->add_option("--out", bake.out, "Output folder (default: out/<scene name>)");
   auto* bake_frames_opt = bake_cmd->add_option(
       "--frames", bake.frames, "N: frames 1..N; A-B: simulate from the start, write frames A..B (default: 1..output.frames)");
-  bake_cmd->add_option("--threads", bake.threads, "Worker threads (default: all cores)")->check(CLI::PositiveNumber);
+  bake_cmd->add_option("--threads", bake.threads, "Worker threads (default: all cores)")->check(kPositiveNumber);
   auto* bake_set_opt = bake_cmd->add_option("--set", bake.overrides,
                                             "Override a scene value by its JSON path, e.g. --set solver.iterations=8");
   bake_cmd->add_option("--resume", bake.resume,
@@ -355,9 +388,9 @@ int main(int argc, char** argv) {
       "default: substeps=1,2,4,8,16 and iterations=1,2,4,8");
   auto* bench_frames_opt =
       bench_cmd->add_option("--frames", bench.frames, "Frames per run (default: the scene's output.frames)")
-          ->check(CLI::PositiveNumber);
+          ->check(kPositiveNumber);
   bench_cmd->add_option("--out", bench.out, "Output folder (default: out/bench/<scene name>, out/stability)");
-  bench_cmd->add_option("--threads", bench.threads, "Worker threads (default: all cores)")->check(CLI::PositiveNumber);
+  bench_cmd->add_option("--threads", bench.threads, "Worker threads (default: all cores)")->check(kPositiveNumber);
   auto* bench_set_opt =
       bench_cmd->add_option("--set", bench.overrides, "Override a scene value by its JSON path for every run");
   auto* bench_ref_opt =
@@ -366,10 +399,10 @@ int main(int argc, char** argv) {
           ->capture_default_str();
   auto* bench_ref_sub_opt = bench_cmd->add_option("--reference-substeps", bench.reference_substeps,
                                                   "Reference substeps (default: 4x the largest swept, at least 64)")
-                                ->check(CLI::PositiveNumber);
+                                ->check(kPositiveNumber);
   auto* bench_ref_it_opt = bench_cmd->add_option(
       "--reference-iterations", bench.reference_iterations,
-      "XPBD reference iterations (default: 2x the largest swept, at least 16)")->check(CLI::PositiveNumber);
+      "XPBD reference iterations (default: 2x the largest swept, at least 16)")->check(kPositiveNumber);
   bool no_plot = false;
   CLI::Option* bench_no_plot = bench_cmd->add_flag("--no-plot", no_plot, "Write the CSV only (no matplotlib)");
   auto* bench_stability = bench_cmd->add_flag("--stability", bench.stability, "Run the stability suite instead");
@@ -380,6 +413,10 @@ int main(int argc, char** argv) {
                   bench_ref_it_opt, bench_no_plot})
     bench_stability->excludes(o);
 
+  if (const auto unknown = unknown_subcommand(app, argc, argv)) {
+    std::cerr << *unknown << "\nRun with --help for more information.\n";
+    return kExitBadInput;
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,5 +1,6 @@
 #include "seiche/kernels/pbf_density.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include <tbb/parallel_for.h>
@@ -17,24 +18,31 @@ constexpr std::size_t kGrain = 256 / kLanes;  // groups of kLanes particles
 constexpr float kCoincident = 1e-12f;  // r^2 below this * h^2: no gradient direction
 constexpr std::size_t kPrefetchGroups = 4;   // neighbor lists prefetched this many groups ahead
 
-// Scalar parameters derived once per call.
-struct Derived {
-  SphKernel kernel;
-  float volume;     // m / rho0
-  float inv_w_dq;   // 1 / W(dq h)
-  explicit Derived(const PbfParams& p)
-      : kernel(p.h), volume(p.mass / p.rest_density), inv_w_dq(0.0f) {
-    const float dq = p.tensile_dq * p.h;
-    const float w_dq = kernel.poly6(dq * dq);
-    inv_w_dq = w_dq > 0.0f ? 1.0f / w_dq : 0.0f;
-  }
-};
-
 float integer_power(float x, int n) {  // n >= 1 (the scalar reference)
   float r = x;
   for (int k = 1; k < n; ++k) r *= x;
   return r;
 }
+
+// Scalar parameters derived once per call.
+struct Derived {
+  SphKernel kernel;
+  float volume;        // m / rho0
+  float inv_w_dq;      // 1 / W(dq h)
+  float rest_power;    // u_s^n = (W(s) / W(dq h))^n, 0 without a rest distance
+  float tensile_norm;  // 1 / (1 - u_s^n); 0 (no s_corr) where u_s >= 1
+  explicit Derived(const PbfParams& p)
+      : kernel(p.h), volume(p.mass / p.rest_density), inv_w_dq(0.0f), rest_power(0.0f),
+        tensile_norm(0.0f) {
+    const float dq = p.tensile_dq * p.h;
+    const float w_dq = kernel.poly6(dq * dq);
+    inv_w_dq = w_dq > 0.0f ? 1.0f / w_dq : 0.0f;
+    const float s = p.tensile_rest_distance;
+    if (s > 0.0f) rest_power = integer_power(kernel.poly6(s * s) * inv_w_dq, p.tensile_n);
+    tensile_norm = rest_power < 1.0f ? 1.0f / (1.0f - rest_power) : 0.0f;
+  }
+  bool tensile(const PbfParams& p) const { return p.tensile_k > 0.0f && inv_w_dq > 0.0f && tensile_norm > 0.0f; }
+};
 template <int N, class T>
 T integer_power(const T& x) {  // N >= 1, by repeated squaring
   if constexpr (N == 1) {
@@ -226,11 +234,11 @@ void apply_correction(const Float4* pos_lambda, NeighborSpan nbr, std::size_t n,
   const Derived d(prm);
   const float grad_scale = d.volume * d.kernel.spiky_coeff;
   const float w_scale = d.kernel.poly6_coeff * d.inv_w_dq;  // W(r) / W(dq) = s^3 * this
-  const float tensile_k = prm.tensile_k * prm.lambda_scale;
+  const float tensile_k = prm.tensile_k * prm.lambda_scale * d.tensile_norm;
   const std::size_t groups = (n + kLanes - 1) / kLanes;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, groups, kGrain), [&](const auto& range) {
     const PairConstants c(d.kernel);
-    const Floats w_scale_b(w_scale), tensile_k_b(tensile_k);
+    const Floats w_scale_b(w_scale), tensile_k_b(tensile_k), rest_power_b(d.rest_power);
     for (std::size_t g = range.begin(); g != range.end(); ++g) {
       prefetch_lists(nbr, (g + kPrefetchGroups) * kLanes, (g + kPrefetchGroups + 1) * kLanes, n);
       const NeighborGroup group(nbr, g * kLanes, n);
@@ -242,7 +250,10 @@ void apply_correction(const Float4* pos_lambda, NeighborSpan nbr, std::size_t n,
         const auto t = pair_terms(c, q.r2);
         Floats scale = pi.w + pj.w;
         if constexpr (N > 0)
-          scale = mul_sub_from(tensile_k_b, integer_power<N>(t.s * t.s * t.s * w_scale_b), scale);
+          scale = mul_sub_from(
+              tensile_k_b,
+              xsimd::max(integer_power<N>(t.s * t.s * t.s * w_scale_b) - rest_power_b, c.zero),
+              scale);
         const Floats f = scale * t.grad;
         accumulate(sx, f, q.dx);
         accumulate(sy, f, q.dy);
@@ -266,7 +277,7 @@ void apply_correction(const Float4* pos_lambda, NeighborSpan nbr, std::size_t n,
 
 void pbf_apply_correction(const Float4* pos_lambda, NeighborSpan nbr, std::size_t n,
                           const PbfParams& prm, float* px, float* py, float* pz) {
-  const bool tensile = prm.tensile_k > 0.0f && Derived(prm).inv_w_dq > 0.0f;
+  const bool tensile = Derived(prm).tensile(prm);
   switch (tensile ? prm.tensile_n : 0) {
     case 0: return apply_correction<0>(pos_lambda, nbr, n, prm, px, py, pz);
     case 1: return apply_correction<1>(pos_lambda, nbr, n, prm, px, py, pz);
@@ -322,9 +333,10 @@ void pbf_apply_correction_reference(const Float4* pos_lambda, NeighborSpan nbr, 
       const float dx = pi.x - pj.x, dy = pi.y - pj.y, dz = pi.z - pj.z;
       const float r2 = dx * dx + dy * dy + dz * dz;
       double scale = double(pi.w) + pj.w;
-      if (prm.tensile_k > 0.0f && d.inv_w_dq > 0.0f)
-        scale -= double(prm.tensile_k) * prm.lambda_scale *
-                 integer_power(d.kernel.poly6(r2) * d.inv_w_dq, prm.tensile_n);
+      if (d.tensile(prm))
+        scale -= double(prm.tensile_k) * prm.lambda_scale * d.tensile_norm *
+                 std::max(double(integer_power(d.kernel.poly6(r2) * d.inv_w_dq, prm.tensile_n)) -
+                              d.rest_power, 0.0);
       const double f = scale * d.kernel.spiky_grad_over_r(r2);
       sx += f * dx;
       sy += f * dy;

@@ -13,6 +13,8 @@
 #include <cerrno>
 #include <charconv>
 #include <chrono>
+#include <cmath>
+#include <limits>
 #include <cstring>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -38,6 +40,19 @@ using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point t) {
   return std::chrono::duration<double>(Clock::now() - t).count();
+}
+
+// A frame number of bake.json: a whole number in [1, INT_MAX]. Read as a double and checked
+// before the conversion (get<int> truncates 2.5 to 2, and a value past int's range is undefined
+// behaviour).
+int read_frame_number(const nlohmann::json& doc, const char* key, const fs::path& file) {
+  const nlohmann::json& v = doc.at(key);
+  constexpr double kMaxFrame = std::numeric_limits<int>::max();
+  const double d = v.is_number() ? v.get<double>() : 0.0;
+  if (!v.is_number() || !(d >= 1.0 && d <= kMaxFrame) || std::floor(d) != d)
+    throw ResumeError(fmt::format("{}: damaged bake description: {} must be a whole number in [1, {}], got {}",
+                                  file.string(), key, std::numeric_limits<int>::max(), v.dump()));
+  return static_cast<int>(d);
 }
 
 }  // namespace
@@ -135,8 +150,8 @@ BakeRecipe read_bake_recipe(const fs::path& dir) {
     r.scene_json = doc.at("scene").get<std::string>();
     r.scene_dir = doc.value("scene_dir", std::string());
     r.overrides = doc.at("overrides").get<std::vector<std::string>>();
-    r.first_frame = doc.at("first_frame").get<int>();
-    r.last_frame = doc.at("last_frame").get<int>();
+    r.first_frame = read_frame_number(doc, "first_frame", file);
+    r.last_frame = read_frame_number(doc, "last_frame", file);
     r.family = doc.at("family").get<std::string>();
     r.fused_multiply_add = doc.at("fused_multiply_add").get<bool>();
     r.simd = doc.at("simd").get<std::string>();

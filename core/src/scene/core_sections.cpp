@@ -14,11 +14,13 @@ namespace {
 
 constexpr double kMaxStepsPerFrame = 10000;  // substeps and iterations: more is a typo
 constexpr double kMinSubstep = 1e-6;         // s: below this, float time steps underflow
+constexpr double kMaxFrameDt = 10;           // s: frames are 1/24-1/60 s; 10 s is a unit mistake
+constexpr double kMaxTensileK = 1;           // k = 1: s_corr already as strong as a 100 % compression
 
 const KeyTable<SolverDef>& solver_keys() {
   using K = Key<SolverDef>;
   static const KeyTable<SolverDef> keys{
-      K("frame_dt", &SolverDef::frame_dt, Range::above(0))
+      K("frame_dt", &SolverDef::frame_dt, Range::left_open(0, kMaxFrameDt))
           .unit("s")
           .default_text("`1/60` (0.016666…)")
           .valid_note("and `frame_dt / substeps` ≥ 1e-6")
@@ -43,15 +45,18 @@ const KeyTable<SolverDef>& solver_keys() {
       K("damping", &SolverDef::damping, Range::at_least(0))
           .unit("1/s")
           .doc("velocity damping c: v ← v·exp(−c·dt) every substep (free particles); 0 = off, no pass"),
-      K("tensile_k", &SolverDef::tensile_k, Range::at_least(0))
-          .doc("artificial pressure s_corr = −k (W(r) / W(dq·h))ⁿ / D0 (PBF eq. 13; D0 as for "
-               "`relaxation`, so k is the compression this repulsion is worth at r = dq·h), given for a "
+      K("tensile_k", &SolverDef::tensile_k, Range::closed(0, kMaxTensileK))
+          .doc("artificial pressure s_corr = −k max(uⁿ − u_sⁿ, 0) / (1 − u_sⁿ) / D0 with u = W(r) / "
+               "W(dq·h) and u_s its value at the rest spacing (PBF eq. 13 shifted to 0 at the rest "
+               "spacing: it pushes apart only pairs closer than that, never a free surface outward; D0 "
+               "as for `relaxation`, so k is the compression this repulsion is worth at r = dq·h), given for a "
                "substep of 1/480 s (the default 1/60 s frame in 8 substeps) and scaled by (dt·480)², at "
                "most 1, so that it is the same force at any shorter substep; 0 turns it off. Half the "
                "paper's 0.1, which made colliding fluid gain energy at 1/480 s (docs/design.md)"),
       K("tensile_n", &SolverDef::tensile_n, Range::closed(1, 8)).doc("the exponent n of s_corr"),
       K("tensile_dq", &SolverDef::tensile_dq, Range::open(0, 1))
-          .doc("dq of s_corr as a fraction of the kernel radius h"),
+          .doc("dq of s_corr as a fraction of the kernel radius h; from dq·h ≥ the fluid spacing on "
+               "(dq ≥ 1 / `kernel_radius`) there is no artificial pressure"),
   };
   return keys;
 }

@@ -33,6 +33,7 @@ struct Range {
   static Range closed(double lo, double hi) { return {lo, hi, false, false}; }   // [lo, hi]
   static Range open(double lo, double hi) { return {lo, hi, true, true}; }       // (lo, hi)
   static Range half_open(double lo, double hi) { return {lo, hi, false, true}; } // [lo, hi)
+  static Range left_open(double lo, double hi) { return {lo, hi, true, false}; } // (lo, hi]
 
   bool contains(double v) const;
   std::string describe() const;  ///< ">= 1", "> 0", "in [0, 1]", "in (0, 1)"

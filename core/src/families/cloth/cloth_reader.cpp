@@ -19,6 +19,9 @@ namespace seiche::detail {
 namespace {
 
 constexpr double kMaxSheetResolution = 4096;  // vertices per side: 16 M vertices in all
+constexpr double kMaxThickness = 1;            // m: a sheet a metre thick is a unit mistake (cm as m)
+constexpr double kMaxStretchCompliance = 1e8;  // m/N: 1 mN stretches an edge 100 km: no constraint left
+constexpr double kMaxBendCompliance = 1e8;     // 1/(N m): 1e4 is cotton; 1e8 does not bend back at all
 
 std::string_view name_rule() {
   static const std::string rule =
@@ -42,15 +45,15 @@ const KeyTable<ClothDef>& cloth_keys() {
           .unit("kg/m²")
           .doc("a vertex gets a third of the area of each of its triangles (a vertex in no triangle: the "
                "mean)"),
-      K("thickness", &ClothDef::thickness, Range::above(0))
+      K("thickness", &ClothDef::thickness, Range::left_open(0, kMaxThickness))
           .unit("m")
           .doc("contact distance between its particles (self and cloth-cloth contacts); half of it is "
                "the particles' radius against colliders and the domain. Keep it below the edge length: "
                "vertices two edges apart are not excluded from contacts"),
-      K("stretch_compliance", &ClothDef::stretch_compliance, Range::at_least(0))
+      K("stretch_compliance", &ClothDef::stretch_compliance, Range::closed(0, kMaxStretchCompliance))
           .unit("m/N")
           .doc("XPBD compliance of every edge; 0 = inextensible"),
-      K("bend_compliance", &ClothDef::bend_compliance, Range::above(0))
+      K("bend_compliance", &ClothDef::bend_compliance, Range::left_open(0, kMaxBendCompliance))
           .unit("1/(N·m)")
           .doc("inverse bending stiffness B; `1e4` (B = 1e-4 N·m) bends like cotton, `1e2` like "
                "cardboard. Same unit for both models; independent of the mesh resolution"),

@@ -28,7 +28,7 @@ std::unique_ptr<MeshSdf> build_collider_sdf(const ColliderDef& c, std::size_t in
     voxel = std::max(extent / 64.0f, 1e-6f);
   }
   auto sdf = std::make_unique<MeshSdf>();
-  build_mesh_sdf(mesh, voxel, 4.0f * voxel, c.mesh.file, path + ".file", *sdf);
+  build_mesh_sdf(mesh, voxel, 4.0f * voxel, c.mesh.file, path, *sdf);
   return sdf;
 }
 

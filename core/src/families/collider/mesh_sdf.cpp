@@ -177,9 +177,10 @@ constexpr double kLatticeUnits = 65536.0;  // lattice points per voxel
 }  // namespace
 
 void build_mesh_sdf(const ClothMesh& mesh, float voxel, float band, const std::string& file,
-                    const std::string& json_path, MeshSdf& out) {
+                    const std::string& mesh_path, MeshSdf& out) {
+  const std::string json_path = mesh_path + ".file", voxel_path = mesh_path + ".voxel_size";
   if (!(voxel > 0.0f) || !std::isfinite(voxel)) {
-    throw SceneError(file, json_path, fmt::format("voxel size must be > 0 (m), got {}", voxel));
+    throw SceneError(file, voxel_path, fmt::format("voxel size must be > 0 (m), got {}", voxel));
   }
   if (!(band >= 0.0f) || !std::isfinite(band)) {
     throw std::invalid_argument(fmt::format("build_mesh_sdf: band must be >= 0, got {}", band));
@@ -279,7 +280,7 @@ void build_mesh_sdf(const ClothMesh& mesh, float voxel, float band, const std::s
     const double cells = std::max(1.0, std::ceil(extent / h * (1.0 - 1e-6)));
     total *= cells + 1.0;
     if (total > double(1u << 26)) {
-      throw SceneError(file, json_path,
+      throw SceneError(file, voxel_path,
                        fmt::format("voxel size {} m is too small for this mesh: the field would "
                                    "have more than {} samples",
                                    voxel, 1u << 26));

@@ -23,9 +23,10 @@ struct MeshSdf {
 /// within 1.5 voxels of the mesh; farther away the exact distance to a nearby triangle, never
 /// less than the true distance and at most a few hundredths of a voxel more (see mesh_sdf.cpp).
 /// The sign from the mesh's inside (the mesh must be closed: every edge of its faces shared by
-/// exactly two triangles, else SceneError(file, json_path, ...) naming an open edge; also a
-/// SceneError for a voxel <= 0 or a grid of more than 2^26 samples).
+/// exactly two triangles, else SceneError(file, mesh_path + ".file", ...) naming an open edge;
+/// SceneError(file, mesh_path + ".voxel_size", ...) for a voxel <= 0 or a grid of more than 2^26
+/// samples). `mesh_path` is the JSON path of the mesh object, e.g. "colliders[0].mesh".
 void build_mesh_sdf(const ClothMesh& mesh, float voxel, float band, const std::string& file,
-                    const std::string& json_path, MeshSdf& out);
+                    const std::string& mesh_path, MeshSdf& out);
 
 }  // namespace seiche

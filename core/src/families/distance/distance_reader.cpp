@@ -12,7 +12,10 @@ namespace seiche::detail {
 
 namespace {
 
-constexpr double kMinMass = 1e-12;  // kg: 1 / mass must be a finite float
+// kg: 1 / mass must be a finite float. A float: the documented bound, read as a float like the
+// mass, is itself valid (1e-12 as a float is 9.9999998e-13, below the double 1e-12).
+constexpr float kMinMass = 1e-12f;
+constexpr double kMaxCompliance = 1e8;  // m/N: 1 mN stretches the pair 100 km: no constraint left
 
 const KeyTable<ParticleDef>& particle_keys() {
   using K = Key<ParticleDef>;
@@ -58,7 +61,7 @@ const KeyTable<DistanceConstraintDef>& distance_constraint_keys() {
           .unit("m")
           .default_text("absent: the initial distance between i and j")
           .doc("target length"),
-      K("compliance", &DistanceConstraintDef::compliance, Range::at_least(0))
+      K("compliance", &DistanceConstraintDef::compliance, Range::closed(0, kMaxCompliance))
           .unit("m/N")
           .doc("inverse stiffness; 0 = infinitely stiff"),
   };

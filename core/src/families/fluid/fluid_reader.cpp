@@ -19,6 +19,8 @@ constexpr double kMaxParticles = 50e6;          // all blocks together (32-bit n
 // past 4 a particle has some 270 neighbors, far past any useful accuracy.
 constexpr double kMinKernelRadius = 1.5, kMaxKernelRadius = 4.0;
 constexpr double kLatticeTolerance = 1e-4;  // of a spacing, absorbs rounding of box edges
+constexpr double kMaxRestDensity = 1e5;  // kg/m^3: over 4x osmium, the densest element (22.6 t/m^3)
+constexpr double kMaxVorticity = 100;    // m/s: typical 0.01-1; past 100 swirls outrun any liquid flow
 
 const KeyTable<FluidDef>& fluid_keys() {
   using K = Key<FluidDef>;
@@ -32,10 +34,12 @@ const KeyTable<FluidDef>& fluid_keys() {
       K("kernel_radius", &FluidDef::kernel_radius, Range::closed(kMinKernelRadius, kMaxKernelRadius))
           .unit("spacings")
           .doc("SPH smoothing radius h, in units of `spacing` (2: about 30 neighbors)"),
-      K("rest_density", &FluidDef::rest_density, Range::above(0)).unit("kg/m³").doc("rest density ρ₀"),
+      K("rest_density", &FluidDef::rest_density, Range::left_open(0, kMaxRestDensity))
+          .unit("kg/m³")
+          .doc("rest density ρ₀"),
       K("viscosity", &FluidDef::viscosity, Range::closed(0, 1))
           .doc("XSPH viscosity coefficient c; 0 = off"),
-      K("vorticity", &FluidDef::vorticity, Range::at_least(0))
+      K("vorticity", &FluidDef::vorticity, Range::closed(0, kMaxVorticity))
           .unit("m/s")
           .doc("vorticity confinement strength ε; 0 = off"),
       K("velocity", &FluidDef::velocity).unit("m/s").doc("initial velocity of every particle of the block"),

@@ -29,6 +29,7 @@ FluidSolver::FluidSolver(const FluidDef& material, const SolverDef& solver,
   params_.tensile_k = solver.tensile_k * tensile_substep_scale(solver);
   params_.tensile_n = solver.tensile_n;
   params_.tensile_dq = solver.tensile_dq;
+  params_.tensile_rest_distance = s;  // s_corr pushes no pair apart beyond the rest spacing
   params_.walls = true;
   params_.wall_scale = float(kernels::lattice_wall_share(s, params_.h) /
                              kernels::wall_density_fraction(0.5f * s, params_.h));

@@ -33,7 +33,7 @@ const KeyTable<ShapeDef>& shape_keys() {
       K("density", &ShapeDef::density, Range{0, kMaxDensity, true, false})  // (0, 1e5]
           .unit("kg/m³")
           .doc("each particle weighs `density * spacing³`"),
-      K("stiffness", &ShapeDef::stiffness, Range{0, 1, true, false})  // (0, 1]
+      K("stiffness", &ShapeDef::stiffness, Range::left_open(0, 1))
           .doc("1 keeps the shape rigid; less pulls each particle that part of the way to its rigid goal "
                "every iteration (soft)"),
       K("velocity", &ShapeDef::velocity).unit("m/s").doc("initial velocity of every particle"),
