@@ -5,11 +5,14 @@
 // reads is then restored (restore_checkpoint) into a simulation of the seed scene
 // (checkpoint_fuzz_scene.hpp), which runs the families' chunk readers and the reordering.
 // A ResumeError is the expected answer to bad input; anything else (another exception, a crash,
-// a leak, an AddressSanitizer/UBSan report) is a finding.
+// a leak, an AddressSanitizer/UBSan report) is a finding. SEICHE_FUZZ_VERBOSE=1 prints each
+// refusal (to see how far an input gets when replaying it: fuzz_checkpoint_reader <file>).
 #include <unistd.h>
 
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -48,8 +51,9 @@ void read_and_restore(std::string_view bytes) {
   try {
     const seiche::Checkpoint cp = seiche::read_checkpoint(file);
     seiche::restore_checkpoint(scene_simulation(), cp, cp.scene_fingerprint, file);
-  } catch (const seiche::ResumeError&) {
+  } catch (const seiche::ResumeError& e) {
     // refused with a message naming the file: what the reader must do
+    if (std::getenv("SEICHE_FUZZ_VERBOSE") != nullptr) std::fprintf(stderr, "%s\n", e.what());
   }
 }
 

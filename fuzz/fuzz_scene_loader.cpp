@@ -6,11 +6,12 @@
 // file, which is written as fuzz.obj into the folder relative mesh paths resolve against: the
 // loader reads and checks the meshes a scene names, so the fuzzer mutates both. That folder also
 // links meshes/ to scenes/meshes (the shipped scenes of the seed corpus name them) and data/ to
-// tests/data.
+// tests/data. SEICHE_FUZZ_VERBOSE=1 prints each refusal (when replaying an input).
 #include <unistd.h>
 
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -55,8 +56,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
   try {
     (void)seiche::load_scene_text(scene, "fuzz.json", {}, mesh_folder());
-  } catch (const seiche::SceneError&) {
+  } catch (const seiche::SceneError& e) {
     // bad input, refused with a message: what the loader must do
+    if (std::getenv("SEICHE_FUZZ_VERBOSE") != nullptr) std::fprintf(stderr, "%s\n", e.what());
   }
   return 0;
 }
