@@ -41,7 +41,7 @@ run() {
   if "$build/fuzz/$target" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
        -print_final_stats=1 -artifact_prefix="$build/findings/$target-" "$@" \
        "$build/corpus/$target" "$seeds" >"$log" 2>&1; then
-    echo "fuzz: $target: no finding; $(grep -m1 -oE 'Done [0-9]+ runs in [0-9]+ second' "$log" | sed 's/Done //; s/ second/ s/'), $(grep -m1 -oE 'stat::number_of_executed_units: *[0-9]+' "$log" | grep -oE '[0-9]+$') inputs, $(ls "$build/corpus/$target" | wc -l) in the corpus ($log)"
+    echo "fuzz: $target: no finding; $(grep -m1 -oE 'Done [0-9]+ runs in [0-9]+ second' "$log" | sed 's/Done \([0-9]*\) runs in \([0-9]*\) second/\1 inputs in \2 s/'), $(grep -m1 INITED "$log" | grep -oE 'cov: [0-9]+' | grep -oE '[0-9]+') code edges covered by the corpus at start, $(grep -E 'DONE' "$log" | grep -oE 'cov: [0-9]+' | grep -oE '[0-9]+') at the end, $(ls "$build/corpus/$target" | wc -l) inputs in the corpus ($log)"
   else
     echo "fuzz: $target FOUND A PROBLEM: $(ls -t "$build/findings/" | grep "^$target-" | head -1) in $build/findings/; the report:" >&2
     grep -m1 -A30 -E 'ERROR|runtime error|==[0-9]+==|terminate called|uncaught' "$log" >&2 || tail -40 "$log" >&2
