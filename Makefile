@@ -5,15 +5,22 @@
 #   make bench  every microbenchmark, then the stability suite (seiche bench --stability)
 #   make check-widths  compile (only) the kernels for every SIMD width: SSE2, AVX2, AVX-512 and
 #               AArch64 NEON (WIDTHS="x86-64-v4 ..." for some); what CI runs before make test
+#   make asan   build with AddressSanitizer and UBSan (g++, -O1, build/asan) and run the tests
+#               labelled "fast" (tests/CMakeLists.txt); what CI runs after make test
+#   make fuzz   build the libFuzzer targets (clang-14, sanitizers, build/fuzz) and run each for
+#               FUZZ_SECONDS seconds (default 60): the scene loader and the checkpoint reader
 BUILD_DIR ?= build/release
 JOBS ?= $(shell nproc)
 SEICHE := $(BUILD_DIR)/apps/seiche
 CMAKE_FLAGS ?=
 WIDTHS ?=
+ASAN_DIR ?= build/asan
+FUZZ_DIR ?= build/fuzz
+FUZZ_SECONDS ?= 60
 
 RENDER_FRAME ?= 40
 
-.PHONY: all deps ci-deps configure build run test bench render check-widths clean
+.PHONY: all deps ci-deps configure build run test bench render check-widths asan fuzz clean
 
 all: build
 
@@ -56,6 +63,26 @@ bench: build
 # Builds for widths this machine may not run, so a change that breaks one fails on any machine.
 check-widths: ci-deps
 	@JOBS=$(JOBS) bash scripts/check-widths.sh $(WIDTHS)
+
+# -O1 keeps the sanitized tests fast enough; NDEBUG as in Release, so the same code is checked.
+# A UBSan report fails its test (-fno-sanitize-recover); so does an ASan one, or a leak.
+SANITIZE_FLAGS := -fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer
+asan: deps
+	@cmake -S . -B $(ASAN_DIR) -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+	  "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG" "-DCMAKE_CXX_FLAGS=$(SANITIZE_FLAGS)" \
+	  -DSEICHE_BUILD_BENCHMARKS=OFF $(CMAKE_FLAGS) >/dev/null
+	@cmake --build $(ASAN_DIR) -j $(JOBS)
+	UBSAN_OPTIONS=print_stacktrace=1 ctest --test-dir $(ASAN_DIR) -L fast --output-on-failure -j $(JOBS)
+
+# clang-14 and its sanitizer runtimes (libclang-rt-14-dev) are installed here when missing: only
+# the fuzz build needs them. OpenVDB, the tests and the benchmarks are left out of it.
+fuzz:
+	@bash scripts/install-deps.sh clang-14 libclang-rt-14-dev
+	@cmake -S . -B $(FUZZ_DIR) -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+	  "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -DNDEBUG" -DCMAKE_CXX_COMPILER=clang++-14 -DSEICHE_FUZZ=ON \
+	  -DSEICHE_WITH_OPENVDB=OFF -DSEICHE_BUILD_TESTS=OFF -DSEICHE_BUILD_BENCHMARKS=OFF >/dev/null
+	@cmake --build $(FUZZ_DIR) -j $(JOBS) --target fuzz_scene_loader fuzz_checkpoint_reader write_checkpoint_seeds
+	@FUZZ_SECONDS=$(FUZZ_SECONDS) bash fuzz/run_fuzzers.sh $(FUZZ_DIR)
 
 clean:
 	rm -rf build out

@@ -11,7 +11,7 @@ packages=(
   libgtest-dev libbenchmark-dev
   libopenvdb-dev libboost-iostreams-dev libblosc-dev
   python3 python3-matplotlib
-  "$@"  # more, for other uses (scripts/install-ci-deps.sh: the AArch64 cross compiler)
+  "$@"  # more, for other uses (install-ci-deps.sh: the AArch64 cross compiler, clang; make fuzz: clang)
 )
 
 missing=()
