@@ -30,7 +30,7 @@ const KeyTable<ShapeDef>& shape_keys() {
       K("spacing", &ShapeDef::spacing, Range::above(0))
           .unit("m")
           .doc("particle spacing; each particle's collision radius is half of it"),
-      K("density", &ShapeDef::density, Range{0, kMaxDensity, true, false})  // (0, 1e5]
+      K("density", &ShapeDef::density, Range::left_open(0, kMaxDensity))
           .unit("kg/m³")
           .doc("each particle weighs `density * spacing³`"),
       K("stiffness", &ShapeDef::stiffness, Range::left_open(0, 1))
