@@ -1,7 +1,8 @@
 # Seiche: the two commands of the README's quick start, and a few for developers.
 #   make run    install what is missing, build Release, bake the default scene
 #   make render render one baked frame with Blender (needs Debian's blender package)
-#   make test   install what is missing, build, run every test through ctest
+#   make blender-addon  the Blender add-on (blender/addons/seiche_importer) as build/seiche_importer.zip
+#   make test   install what is missing (and Blender, for the add-on's test), build, run every test through ctest
 #   make bench  every microbenchmark, then the stability suite (seiche bench --stability)
 #   make check-widths  compile (only) the kernels for every SIMD width: SSE2, AVX2, AVX-512 and
 #               AArch64 NEON (WIDTHS="x86-64-v4 ..." for some); what CI runs before make test
@@ -20,7 +21,7 @@ FUZZ_SECONDS ?= 60
 
 RENDER_FRAME ?= 40
 
-.PHONY: all deps ci-deps configure build run test bench render check-widths asan fuzz clean
+.PHONY: all deps ci-deps configure build run test bench render blender-addon check-widths asan fuzz clean
 
 all: build
 
@@ -43,12 +44,25 @@ run: build
 	@echo "make run: the baked frames (dam_break.%04d.vdb, particles.%04d.ply) and report.json are in out/dam_break/; docs/rendering.md says how to load them"
 
 render:
-	@command -v blender >/dev/null || { echo "make render: needs Blender (apt-get install blender)" >&2; exit 1; }
-	@test -f out/dam_break/dam_break.$(shell printf %04d $(RENDER_FRAME)).vdb || { echo "make render: run 'make run' first (no out/dam_break/dam_break.$(shell printf %04d $(RENDER_FRAME)).vdb)" >&2; exit 1; }
-	blender -b --factory-startup -P scripts/render_frame.py -- out/dam_break/dam_break.$(shell printf %04d $(RENDER_FRAME)).vdb out/dam_break/render.$(shell printf %04d $(RENDER_FRAME)).png --samples 64
+	@command -v blender >/dev/null || { echo "make render: needs Blender (apt-get install blender python3-numpy)" >&2; exit 1; }
+	@test -f out/dam_break/bake.json || { echo "make render: run 'make run' first (no bake in out/dam_break)" >&2; exit 1; }
+	blender -b --factory-startup -P scripts/render_frame.py -- out/dam_break $(RENDER_FRAME) out/dam_break/render.$(shell printf %04d $(RENDER_FRAME)).png --samples 64
 	@echo "make render: out/dam_break/render.$(shell printf %04d $(RENDER_FRAME)).png"
 
+# The Blender add-on as the zip Blender's preferences install (Add-ons > Install...).
+blender-addon:
+	@mkdir -p build
+	@cd blender/addons && python3 -c 'import os, sys, zipfile; z = zipfile.ZipFile(sys.argv[1], "w", zipfile.ZIP_DEFLATED); \
+	  [z.write(os.path.join(d, f)) for d, _, fs in os.walk("seiche_importer") for f in sorted(fs) if f.endswith(".py")]' ../../build/seiche_importer.zip
+	@echo "make blender-addon: build/seiche_importer.zip (Blender: Edit > Preferences > Add-ons > Install..., then tick 'Import-Export: Seiche bake')"
+
+# Test-only packages, installed by `make test` when missing (not by `make run`): Debian's Blender
+# and NumPy (the add-on reads frames with it; Debian's blender uses the system python3-numpy) for the
+# add-on's test (tests/blender/).
+TEST_DEPS := blender python3-numpy
+
 test: build
+	@bash scripts/install-deps.sh $(TEST_DEPS)
 	ctest --test-dir $(BUILD_DIR) --output-on-failure -j $(JOBS)
 
 # Every Google Benchmark target, medians of 5 repetitions; then the stability suite at full size.

@@ -11,7 +11,8 @@ packages=(
   libgtest-dev libbenchmark-dev
   libopenvdb-dev libboost-iostreams-dev libblosc-dev
   python3 python3-matplotlib
-  "$@"  # more, for other uses (install-ci-deps.sh: the AArch64 cross compiler, clang; make fuzz: clang)
+  "$@"  # more, for other uses (install-ci-deps.sh: the AArch64 cross compiler, clang; make fuzz: clang;
+        # make test: blender and python3-numpy, for the Blender add-on's test)
 )
 
 missing=()

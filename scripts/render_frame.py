@@ -1,28 +1,35 @@
-# Renders one baked Seiche frame with Blender (headless, Cycles on the CPU): the .vdb file is
-# imported as a Volume object, its "density" grid is turned into a surface with Blender's
-# Volume to Mesh modifier and shaded as water, inside the scene's domain box.
+# Renders one frame of a Seiche bake with Blender (headless, Cycles on the CPU), through the
+# repository's add-on (blender/addons/seiche_importer): the bake folder is imported as the add-on
+# does it (the fluid surface is the "surface" level set meshed at 0, so all the water shows, with
+# a water material: transmission 1, IOR 1.33), then a floor, two walls, a camera, a sun and a sky
+# are added around the scene's domain.
 #
-#   blender -b --factory-startup -P scripts/render_frame.py -- FRAME.vdb OUT.png \
-#       [--domain x0 y0 z0 x1 y1 z1] [--samples 32] [--size 960 540]
+#   blender -b --factory-startup -P scripts/render_frame.py -- BAKE_DIR FRAME OUT.png \
+#       [--samples 32] [--size 960 540] [--particles]
 #
-# Seiche is y-up, Blender z-up: the volume is rotated +90 degrees about x on import.
+# Seiche is y-up, Blender z-up: the add-on turns the imported objects +90 degrees about x.
 import argparse
 import math
+import os
 import sys
 
 import bpy
 from mathutils import Vector
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "blender", "addons"))
+import seiche_importer  # noqa: E402  (the add-on, from the repository)
+from seiche_importer import bake_folder, import_bake, materials  # noqa: E402
+
 
 def parse_args():
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
     p = argparse.ArgumentParser(prog="render_frame.py")
-    p.add_argument("vdb")
+    p.add_argument("bake", help="the folder `seiche bake` wrote")
+    p.add_argument("frame", type=int)
     p.add_argument("png")
-    p.add_argument("--domain", type=float, nargs=6, default=[0, 0, 0, 4, 3, 1.5])
     p.add_argument("--samples", type=int, default=32)
     p.add_argument("--size", type=int, nargs=2, default=[960, 540])
-    p.add_argument("--grid", default="density")
+    p.add_argument("--particles", action="store_true", help="render the particles as points too")
     return p.parse_args(argv)
 
 
@@ -31,52 +38,35 @@ def y_up_to_z_up(v):
     return Vector((v[0], -v[2], v[1]))
 
 
-def material(name, color, roughness, transmission=0.0):
-    m = bpy.data.materials.new(name)
-    m.use_nodes = True
-    nodes = m.node_tree.nodes
-    bsdf = next((n for n in nodes if n.type == "BSDF_PRINCIPLED"), None)
-    if bsdf is None:  # some builds start a node material empty
-        bsdf = nodes.new("ShaderNodeBsdfPrincipled")
-        output = next((n for n in nodes if n.type == "OUTPUT_MATERIAL"), None) or nodes.new("ShaderNodeOutputMaterial")
-        m.node_tree.links.new(bsdf.outputs["BSDF"], output.inputs["Surface"])
-    bsdf.inputs["Base Color"].default_value = (*color, 1.0)
-    bsdf.inputs["Roughness"].default_value = roughness
-    bsdf.inputs["Transmission"].default_value = transmission
-    bsdf.inputs["IOR"].default_value = 1.33
+def wall_material():
+    m, bsdf, _ = materials.principled("walls")
+    bsdf.inputs["Base Color"].default_value = (0.8, 0.8, 0.78, 1.0)
+    bsdf.inputs["Roughness"].default_value = 0.6
     return m
 
 
 def main():
     a = parse_args()
     bpy.ops.wm.read_factory_settings(use_empty=True)
+    seiche_importer.register()
     scene = bpy.context.scene
-
-    # The fluid: VDB volume -> mesh of the density grid's 0.5 level.
-    bpy.ops.object.volume_import(filepath=a.vdb)
-    fluid = bpy.context.object
-    fluid.rotation_euler = (math.radians(90), 0, 0)
-    fluid.data.grids.load()
-    names = [g.name for g in fluid.data.grids]
-    if a.grid not in names:
-        sys.exit(f"render_frame.py: {a.vdb} has no grid '{a.grid}' (it has {names})")
-    # Volume to Mesh lives on a mesh object and reads the volume object.
-    surface = bpy.data.objects.new("fluid surface", bpy.data.meshes.new("fluid surface"))
-    scene.collection.objects.link(surface)
-    to_mesh = surface.modifiers.new("surface", "VOLUME_TO_MESH")
-    to_mesh.object = fluid
-    to_mesh.grid_name = a.grid
-    to_mesh.threshold = 0.5
-    to_mesh.resolution_mode = "GRID"
-    to_mesh.use_smooth_shade = True
-    surface.data.materials.append(material("water", (0.18, 0.45, 0.75), 0.08))
-    fluid.hide_render = True
+    try:
+        bake = bake_folder.read_bake_folder(a.bake)
+        import_bake.import_bake(bpy.context, bake, render_particles=a.particles)
+    except bake_folder.BakeFolderError as e:
+        sys.exit(f"render_frame.py: {e}")
+    first, last = bake.frames_present
+    if not first <= a.frame <= last:
+        sys.exit(f"render_frame.py: {a.bake} holds frames {first}-{last}, not {a.frame}")
+    scene.frame_set(a.frame)
 
     # The domain: a floor and the two back walls, so the splash reads against something.
-    lo, hi = y_up_to_z_up(a.domain[:3]), y_up_to_z_up(a.domain[3:])
+    domain = bake.scene.get("domain", {})
+    lo = y_up_to_z_up(domain.get("min", [0, 0, 0]))
+    hi = y_up_to_z_up(domain.get("max", [1, 1, 1]))
     lo, hi = Vector(map(min, lo, hi)), Vector(map(max, lo, hi))
     size = hi - lo
-    wall = material("walls", (0.8, 0.8, 0.78), 0.6)
+    wall = wall_material()
     for name, center, scale in [
         ("floor", (lo.x + size.x / 2, lo.y + size.y / 2, lo.z), (size.x / 2, size.y / 2, 1)),
         ("back", (lo.x + size.x / 2, hi.y, lo.z + size.z / 2), (size.x / 2, size.z / 2, 1)),
@@ -117,10 +107,15 @@ def main():
     scene.cycles.device = "CPU"
     scene.cycles.samples = a.samples
     scene.cycles.use_denoising = False  # Debian's Blender is built without OpenImageDenoise
+    # No caustics and blurred glossy paths: a sun through clear water is otherwise mostly noise
+    # at a few dozen samples.
+    scene.cycles.caustics_reflective = False
+    scene.cycles.caustics_refractive = False
+    scene.cycles.blur_glossy = 1.0
     scene.render.resolution_x, scene.render.resolution_y = a.size
     scene.render.resolution_percentage = 100
     scene.render.image_settings.file_format = "PNG"
-    scene.render.filepath = a.png
+    scene.render.filepath = os.path.abspath(a.png)
     bpy.ops.render.render(write_still=True)
     print(f"render_frame.py: wrote {a.png}")
 
