@@ -234,11 +234,12 @@ TEST(Cli, ReportDoesNotChangeTheParticleFiles) {
 namespace {
 
 // About 2400 fluid particles and a chain on distance constraints: every pass runs, a frame takes
-// a few ms. Particles only (no .vdb), so the tests mean the same with and without OpenVDB.
+// a few ms. Particles only (no .vdb), so the tests mean the same with and without OpenVDB; as PLY
+// and as .vtp with their series particles.pvd, so the resume tests cover both.
 const char* kBakeScene = R"({ "name": "small",
   "solver": { "substeps": 4, "iterations": 2 },
   "domain": { "min": [0,0,0], "max": [1,1,0.5] },
-  "output": { "frames": 20, "checkpoint_every": 5, "vdb": [] },
+  "output": { "frames": 20, "checkpoint_every": 5, "vdb": [], "particle_formats": ["ply", "vtp"] },
   "particles": [ { "x": [0.8,0.9,0.25], "mass": 0 }, { "x": [0.85,0.9,0.25] }, { "x": [0.9,0.9,0.25] } ],
   "distance_constraints": [ { "i": 0, "j": 1 }, { "i": 1, "j": 2 } ],
   "fluids": [ { "box": { "min": [0,0,0], "max": [0.36,0.6,0.3] }, "spacing": 0.03 } ] })";
@@ -361,6 +362,22 @@ TEST(CliBake, KilledBakeResumesFromItsLastCheckpointToTheSameBytes) {
   const bool killed_mid_bake = WIFSIGNALED(status);
   EXPECT_TRUE(killed_mid_bake) << "the bake ended before the kill: " << slurp(log);
   if (killed_mid_bake) EXPECT_FALSE(fs::exists(dir / "particles.0020.ply"));
+  // The series names complete frames only, 1 to k; beside them at most frame k + 1, killed between
+  // its .vtp and the series' rewrite.
+  auto vtp = [](int frame) {
+    char name[32];
+    std::snprintf(name, sizeof name, "particles.%04d.vtp", frame);
+    return std::string(name);
+  };
+  const std::string series = slurp(dir / "particles.pvd");
+  int listed = 0;
+  for (std::size_t at = series.find("file=\""); at != std::string::npos; at = series.find("file=\"", at + 1)) {
+    const std::string file = series.substr(at + 6, series.find('"', at + 6) - at - 6);
+    EXPECT_EQ(file, vtp(++listed));
+    EXPECT_TRUE(fs::exists(dir / file)) << file << " is listed but not on disk";
+  }
+  EXPECT_GE(listed, 10) << series;
+  for (int f = listed + 2; f <= 20; ++f) EXPECT_FALSE(fs::exists(dir / vtp(f))) << f;
 
   const Result resumed = seiche("bake --resume " + q(dir));
   ASSERT_EQ(resumed.code, 0) << resumed.err;

@@ -763,6 +763,146 @@ TEST(Bake, ANewBakeRemovesTheEarlierBakesFramesOutsideItsRangeAndNothingElse) {
   for (int f = 1; f <= 6; ++f) EXPECT_TRUE(fs::exists(dir / frame_file_name("particles", f, "ply"))) << f;
 }
 
+// ---- Particles for ParaView: the .vtp frames and their series -----------------------------------
+
+namespace {
+
+const std::vector<std::string> kVtpOverrides = {R"(output.particle_formats=["ply", "vtp"])"};
+
+// The frames particles.pvd lists, by the number in each file name, after checking that each
+// listed time is that frame's (frame * frame_dt, as the simulation computes it).
+std::vector<int> series_frames(const fs::path& dir, double frame_dt) {
+  const std::string pvd = read_bytes(dir / "particles.pvd");
+  std::vector<int> frames;
+  for (std::size_t at = pvd.find("<DataSet "); at != std::string::npos; at = pvd.find("<DataSet ", at + 1)) {
+    auto attribute = [&](const std::string& key) {
+      const std::size_t start = pvd.find(key + "=\"", at) + key.size() + 2;
+      return pvd.substr(start, pvd.find('"', start) - start);
+    };
+    const std::string file = attribute("file");
+    const int frame = std::stoi(file.substr(std::string("particles.").size(), 4));
+    EXPECT_EQ(file, frame_file_name("particles", frame, "vtp"));
+    EXPECT_EQ(std::stod(attribute("timestep")), frame * frame_dt) << file;
+    frames.push_back(frame);
+  }
+  EXPECT_TRUE(pvd.ends_with("</Collection>\n</VTKFile>\n")) << pvd;
+  return frames;
+}
+
+std::vector<int> vtp_frames_on_disk(const fs::path& dir) {
+  std::vector<int> frames;
+  for (int f = 1; f <= 99; ++f)
+    if (fs::exists(dir / frame_file_name("particles", f, "vtp"))) frames.push_back(f);
+  return frames;
+}
+
+std::vector<int> frame_range(int first, int last) {
+  std::vector<int> frames;
+  for (int f = first; f <= last; ++f) frames.push_back(f);
+  return frames;
+}
+
+}  // namespace
+
+TEST(Bake, VtpSeriesListsTheFramesOnDiskThroughAnInterruptAKillAndTheResumes) {
+  const SceneDef scene = mixed_scene(kVtpOverrides);
+  const double dt = scene.solver.frame_dt;
+  const fs::path straight_dir = fresh_dir("vtp_straight"), stopped_dir = fresh_dir("vtp_stopped");
+  bake_scene(scene, mixed_recipe(1, 12, kVtpOverrides), quiet_options(straight_dir));
+  EXPECT_EQ(series_frames(straight_dir, dt), frame_range(1, 12));
+  EXPECT_EQ(vtp_frames_on_disk(straight_dir), frame_range(1, 12));
+
+  // Interrupted after frame 6 (a checkpoint of its own): the series lists frames 1-6, all there.
+  std::atomic<bool> stop{false};
+  BakeOptions o = quiet_options(stopped_dir);
+  o.interrupt = &stop;
+  o.after_frame = [&](int f) {
+    EXPECT_EQ(series_frames(stopped_dir, dt), frame_range(1, f)) << "after frame " << f;
+    stop = f == 6;
+  };
+  EXPECT_EQ(bake_scene(scene, mixed_recipe(1, 12, kVtpOverrides), o).status, BakeResult::Status::Interrupted);
+  EXPECT_EQ(series_frames(stopped_dir, dt), frame_range(1, 6));
+  EXPECT_EQ(vtp_frames_on_disk(stopped_dir), frame_range(1, 6));
+
+  // Resumed, then killed after frame 10's files, before its checkpoint (every 4: the last is 8).
+  const BakeRecipe recipe = read_bake_recipe(stopped_dir);
+  BakeOptions resume = quiet_options(stopped_dir);
+  resume.resume = true;
+  resume.after_frame = [&](int f) {
+    if (f == 10) throw std::runtime_error("killed");
+  };
+  EXPECT_THROW(bake_scene(load_recipe_scene(recipe, stopped_dir / kBakeRecipeFile), recipe, resume),
+               std::runtime_error);
+  EXPECT_EQ(read_checkpoint(stopped_dir / kCheckpointFile).frame, 8);
+  EXPECT_EQ(series_frames(stopped_dir, dt), frame_range(1, 10));
+  EXPECT_EQ(vtp_frames_on_disk(stopped_dir), frame_range(1, 10));
+
+  // The next resume starts from frame 8: the series lists 1-8 before anything else is written,
+  // then grows frame by frame (9 and 10 are rewritten with the same bytes).
+  resume.threads = 1;  // another thread count: still the same bytes
+  resume.after_frame = [&](int f) { EXPECT_EQ(series_frames(stopped_dir, dt), frame_range(1, f)) << f; };
+  const BakeResult last = bake_scene(load_recipe_scene(recipe, stopped_dir / kBakeRecipeFile), recipe, resume);
+  EXPECT_EQ(last.start_frame, 8);
+  EXPECT_EQ(last.status, BakeResult::Status::Complete);
+  const auto a = frame_files(straight_dir), b = frame_files(stopped_dir);
+  EXPECT_EQ(a.size(), 12u * 2 + 3);  // ply + vtp per frame, particles.pvd, checkpoint.bin, bake.json
+  ASSERT_EQ(a.size(), b.size());
+  for (const auto& [name, bytes] : a) {
+    ASSERT_TRUE(b.count(name)) << name;
+    EXPECT_TRUE(b.at(name) == bytes) << name << " differs after the resumes";
+  }
+  expect_no_temporary_files(stopped_dir);
+}
+
+TEST(Bake, ANewBakeReplacesTheEarlierVtpFramesAndTheirSeries) {
+  const SceneDef scene = mixed_scene(kVtpOverrides);
+  const double dt = scene.solver.frame_dt;
+  const fs::path dir = fresh_dir("vtp_rebake"), clean = fresh_dir("vtp_rebake_clean");
+  bake_scene(scene, mixed_recipe(1, 6, kVtpOverrides), quiet_options(dir));
+  ASSERT_EQ(series_frames(dir, dt), frame_range(1, 6));
+  // Frames 3-4 again: before its first frame the series lists none of the earlier bake's.
+  BakeOptions o = quiet_options(dir);
+  o.after_frame = [&](int f) {
+    EXPECT_EQ(series_frames(dir, dt), f < 3 ? std::vector<int>{} : frame_range(3, f)) << "after frame " << f;
+    if (f < 3) {
+      EXPECT_EQ(vtp_frames_on_disk(dir), frame_range(3, 4)) << "the earlier 1, 2, 5, 6 are removed";
+    }
+  };
+  bake_scene(scene, mixed_recipe(3, 4, kVtpOverrides), o);
+  EXPECT_EQ(series_frames(dir, dt), frame_range(3, 4));
+  EXPECT_EQ(vtp_frames_on_disk(dir), frame_range(3, 4));
+  bake_scene(scene, mixed_recipe(3, 4, kVtpOverrides), quiet_options(clean));
+  EXPECT_EQ(frame_files(dir), frame_files(clean));
+}
+
+TEST(Bake, ParticleFormatsChooseTheParticleFiles) {
+  // Only the .vtp: no PLY. The bake's summary names the series; particles = false writes none.
+  const std::vector<std::string> vtp_only = {R"(output.particle_formats=["vtp"])"};
+  const fs::path dir = fresh_dir("vtp_only"), none = fresh_dir("vtp_none");
+  std::ostringstream summary;
+  BakeOptions o = quiet_options(dir);
+  o.summary = &summary;
+  const BakeResult r = bake_scene(mixed_scene(vtp_only), mixed_recipe(1, 2, vtp_only), o);
+  EXPECT_EQ(r.files_written, 4u);  // per frame the .vtp and the series
+  EXPECT_FALSE(fs::exists(dir / "particles.0001.ply"));
+  EXPECT_TRUE(fs::exists(dir / "particles.0002.vtp"));
+  EXPECT_NE(summary.str().find("particles.0001.vtp .. particles.0002.vtp"), std::string::npos) << summary.str();
+  EXPECT_NE(summary.str().find("particles.pvd"), std::string::npos) << summary.str();
+  const std::vector<std::string> off = {R"(output.particle_formats=["vtp"])", "output.particles=false"};
+  bake_scene(mixed_scene(off), mixed_recipe(1, 2, off), quiet_options(none));
+  for (const char* name : {"particles.0001.vtp", "particles.0001.ply", "particles.pvd"})
+    EXPECT_FALSE(fs::exists(none / name)) << name;
+
+  // seiche run writes the formats the scene lists, the series included.
+  RunOptions run;
+  run.out_dir = fresh_dir("vtp_run");
+  run.frames = 2;
+  run_scene(mixed_scene(vtp_only), run);
+  EXPECT_FALSE(fs::exists(run.out_dir / "particles.0001.ply"));
+  EXPECT_EQ(read_bytes(run.out_dir / "particles.0002.vtp"), read_bytes(dir / "particles.0002.vtp"));
+  EXPECT_EQ(read_bytes(run.out_dir / "particles.pvd"), read_bytes(dir / "particles.pvd"));
+}
+
 // ---- Input fingerprints and the memory estimate ----------------------------------------------
 
 // bake.json records the OBJ files the scene refers to as the loader read them; a resume finds a
@@ -851,6 +991,12 @@ TEST(MemoryEstimate, ParticleStoreIsTheStoresBytes) {
                   double(kProcessBytes),
               0.001 * double(e.total()));
   EXPECT_THROW(check_scene_memory(big, "big.json", std::uint64_t(1) << 30), SceneError);
+  // A frame's .vtp buffer beside the PLY's, or instead of it (output.particle_formats).
+  const std::uint64_t n = 4096u * 4096u;
+  big.output.particles_vtp = true;
+  EXPECT_EQ(estimate_scene_memory(big).total(), e.total() + kVtpExportBytesPerParticle * n);
+  big.output.particles_ply = false;
+  EXPECT_EQ(estimate_scene_memory(big).total(), e.total() + kVtpExportBytesPerParticle * n - kExportBytesPerParticle * n);
 }
 
 TEST(MemoryEstimate, SizesParseAndPrint) {

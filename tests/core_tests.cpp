@@ -1,10 +1,13 @@
 // Core layer: the store, scenes run through the Simulation, the runner's files and report.
 #include <gtest/gtest.h>
 
+#include <climits>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <numeric>
 #include <sstream>
 #include <stdexcept>
@@ -22,6 +25,7 @@
 #include "seiche/runner.hpp"
 #include "seiche/scene_loader.hpp"
 #include "seiche/simulation.hpp"
+#include "seiche/vtk_particles.hpp"
 
 using namespace seiche;
 namespace fs = std::filesystem;
@@ -388,6 +392,139 @@ TEST(OutputFiles, BackgroundWriterWritesEveryFileInOrderAndStopsAtTheFirstFailur
 TEST(OutputFiles, UnwritableFolderIsAnIoError) {
   EXPECT_THROW(prepare_output_directory("/dev/null/seiche"), IoError);
   EXPECT_THROW(write_file_atomically("/nonexistent-dir/x.ply", "data"), IoError);
+}
+
+// ---- Particles for ParaView: .vtp and .pvd ----------------------------------------------------
+
+namespace {
+
+// The value of `attribute="..."` in the first XML element at or after `from` that has it.
+std::string xml_attribute(const std::string& text, const std::string& attribute, std::size_t from = 0) {
+  const std::string key = " " + attribute + "=\"";
+  const std::size_t at = text.find(key, from);
+  if (at == std::string::npos) return "<none>";
+  const std::size_t start = at + key.size();
+  return text.substr(start, text.find('"', start) - start);
+}
+
+// Where the DataArray called `name` starts in `header` (npos if none).
+std::size_t data_array(const std::string& header, const char* name) {
+  const std::size_t at = header.find(std::string(" Name=\"") + name + "\"");
+  return at == std::string::npos ? at : header.rfind("<DataArray", at);
+}
+
+// A .vtp's appended arrays by name: the UInt64 byte count each starts with, and its bytes.
+struct VtpArrays {
+  std::string header;                     // the XML before <AppendedData>
+  std::map<std::string, std::string> bytes;  // name -> the array's bytes
+  std::uint64_t data_bytes = 0;           // from the '_' to </AppendedData>
+};
+
+VtpArrays read_vtp(const std::string& file) {
+  VtpArrays v;
+  const std::string appended = "<AppendedData encoding=\"raw\">\n   _";
+  const std::size_t at = file.find(appended);
+  if (at == std::string::npos) return v;
+  v.header = file.substr(0, at);
+  const std::size_t data = at + appended.size();
+  const std::string tail = "\n  </AppendedData>\n</VTKFile>\n";
+  if (!file.ends_with(tail)) return v;
+  v.data_bytes = file.size() - tail.size() - data;
+  for (const char* name : {"velocity", "id", "Points", "connectivity", "offsets"}) {
+    const std::size_t element = data_array(v.header, name);
+    if (element == std::string::npos) continue;
+    const std::uint64_t offset = std::strtoull(xml_attribute(v.header, "offset", element).c_str(), nullptr, 10);
+    std::uint64_t size = 0;
+    if (offset + 8 > v.data_bytes) continue;
+    std::memcpy(&size, file.data() + data + offset, 8);
+    if (offset + 8 + size > v.data_bytes) continue;
+    v.bytes[name] = file.substr(data + offset + 8, size);
+  }
+  return v;
+}
+
+}  // namespace
+
+TEST(VtkParticles, VtpOfATinyStoreHoldsItsArraysInIdOrder) {
+  // Three particles whose store order is not their id order (the grid sort reorders the store).
+  ParticleStore s;
+  s.resize(3);
+  const std::int32_t ids[3] = {2, 0, 1};
+  for (std::size_t i = 0; i < 3; ++i) {
+    s.id[i] = ids[i];
+    s.x[i] = 1.0f + ids[i], s.y[i] = -0.0f, s.z[i] = 0.5f * ids[i];
+    s.vx[i] = 10.0f * ids[i], s.vy[i] = -9.81f, s.vz[i] = 1e-30f;
+  }
+  const std::string file = encode_particles_vtp(s);
+  const VtpArrays v = read_vtp(file);
+  ASSERT_FALSE(v.header.empty()) << file.substr(0, 400);
+  EXPECT_EQ(xml_attribute(v.header, "type"), "PolyData");
+  EXPECT_EQ(xml_attribute(v.header, "byte_order"), "LittleEndian");
+  EXPECT_EQ(xml_attribute(v.header, "header_type"), "UInt64");
+  EXPECT_EQ(xml_attribute(v.header, "NumberOfPoints"), "3");
+  EXPECT_EQ(xml_attribute(v.header, "NumberOfVerts"), "3");
+  EXPECT_EQ(xml_attribute(v.header, "NumberOfPolys"), "0");
+  EXPECT_EQ(xml_attribute(v.header, "type", data_array(v.header, "id")), "Int32");
+  EXPECT_EQ(xml_attribute(v.header, "NumberOfComponents", data_array(v.header, "velocity")), "3");
+  // Five arrays with their UInt64 counts fill the appended data exactly.
+  ASSERT_EQ(v.bytes.size(), 5u);
+  EXPECT_EQ(v.data_bytes, 5 * 8 + 3 * (12 + 4 + 12 + 4 + 4));
+  ASSERT_EQ(v.bytes.at("Points").size(), 36u);
+  ASSERT_EQ(v.bytes.at("velocity").size(), 36u);
+  for (const char* name : {"id", "connectivity", "offsets"}) ASSERT_EQ(v.bytes.at(name).size(), 12u) << name;
+  float points[9], velocity[9];
+  std::int32_t id[3], connectivity[3], offsets[3];
+  std::memcpy(points, v.bytes.at("Points").data(), sizeof(points));
+  std::memcpy(velocity, v.bytes.at("velocity").data(), sizeof(velocity));
+  std::memcpy(id, v.bytes.at("id").data(), sizeof(id));
+  std::memcpy(connectivity, v.bytes.at("connectivity").data(), sizeof(connectivity));
+  std::memcpy(offsets, v.bytes.at("offsets").data(), sizeof(offsets));
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_EQ(id[k], k);
+    EXPECT_EQ(points[3 * k], 1.0f + k);
+    EXPECT_TRUE(std::signbit(points[3 * k + 1])) << "-0.0 kept bit for bit";
+    EXPECT_EQ(points[3 * k + 2], 0.5f * k);
+    EXPECT_EQ(velocity[3 * k], 10.0f * k);
+    EXPECT_EQ(velocity[3 * k + 1], -9.81f);
+    EXPECT_EQ(velocity[3 * k + 2], 1e-30f);
+    EXPECT_EQ(connectivity[k], k);
+    EXPECT_EQ(offsets[k], k + 1);
+  }
+}
+
+TEST(VtkParticles, NoParticlesWritesAValidFileWithNoPoints) {
+  const ParticleStore empty;
+  const std::string file = encode_particles_vtp(empty);
+  const VtpArrays v = read_vtp(file);
+  ASSERT_FALSE(v.header.empty()) << file;
+  EXPECT_EQ(xml_attribute(v.header, "NumberOfPoints"), "0");
+  EXPECT_EQ(xml_attribute(v.header, "NumberOfVerts"), "0");
+  ASSERT_EQ(v.bytes.size(), 5u);  // every array is there, each a count of 0 bytes
+  for (const auto& [name, bytes] : v.bytes) EXPECT_TRUE(bytes.empty()) << name;
+  EXPECT_EQ(v.data_bytes, 5u * 8u);
+}
+
+TEST(VtkParticles, SeriesListsEachFrameWithItsTime) {
+  const double dt = 1.0 / 60.0;
+  const std::string pvd = encode_particle_series_pvd("particles", 3, 5, dt);
+  EXPECT_EQ(xml_attribute(pvd, "type"), "Collection");
+  std::size_t at = 0;
+  for (int f = 3; f <= 5; ++f) {
+    at = pvd.find("<DataSet", at);
+    ASSERT_NE(at, std::string::npos) << f;
+    EXPECT_EQ(xml_attribute(pvd, "file", at), frame_file_name("particles", f, "vtp"));
+    // The time reads back as the simulation's own double, frame * frame_dt.
+    EXPECT_EQ(std::strtod(xml_attribute(pvd, "timestep", at).c_str(), nullptr), f * dt) << f;
+    ++at;
+  }
+  EXPECT_EQ(pvd.find("<DataSet", at), std::string::npos);
+  EXPECT_NE(pvd.find("</Collection>\n</VTKFile>\n"), std::string::npos);
+  // No frame yet: an empty series, still a whole file. The last possible frame ends the loop.
+  const std::string none = encode_particle_series_pvd("particles", 3, 2, dt);
+  EXPECT_EQ(none.find("<DataSet"), std::string::npos);
+  EXPECT_NE(none.find("<Collection>\n  </Collection>"), std::string::npos) << none;
+  const std::string last = encode_particle_series_pvd("particles", INT_MAX, INT_MAX, dt);
+  EXPECT_EQ(xml_attribute(last, "file"), frame_file_name("particles", INT_MAX, "vtp"));
 }
 
 // The progress line: plain in logs; on a terminal a bar in front, cut to the terminal's width.

@@ -293,6 +293,8 @@ TEST(SceneLoader, OutputBakeKeysRoundTrip) {
   const SceneDef defaults = load("{}");
   EXPECT_EQ(defaults.output.checkpoint_every, 10);
   EXPECT_TRUE(defaults.output.particles);
+  EXPECT_TRUE(defaults.output.particles_ply);  // the PLY only, as before the key existed
+  EXPECT_FALSE(defaults.output.particles_vtp);
   EXPECT_TRUE(defaults.output.vdb_surface && defaults.output.vdb_density);
   EXPECT_FALSE(defaults.output.vdb_points || defaults.output.vdb_velocity || defaults.output.mesh);
   EXPECT_EQ(defaults.output.compression, "blosc");
@@ -316,6 +318,12 @@ TEST(SceneLoader, OutputBakeKeysRoundTrip) {
   EXPECT_FALSE(none.output.needs_surface());
   EXPECT_EQ(none.output.compression, "none");
   EXPECT_FALSE(load("{}", {"output.vdb=[]"}).output.any_vdb());  // what the CLI's advice passes
+
+  const SceneDef both = load(R"({"output": {"particle_formats": ["vtp", "ply"]}})");
+  EXPECT_TRUE(both.output.particles_ply && both.output.particles_vtp);
+  const SceneDef vtp = load("{}", {R"(output.particle_formats=["vtp"])"});
+  EXPECT_FALSE(vtp.output.particles_ply);
+  EXPECT_TRUE(vtp.output.particles_vtp);
 }
 
 TEST(SceneLoader, PlaneNormalIsNormalized) {
@@ -611,6 +619,15 @@ const BadCase kBadCases[] = {
      "\"density\" is listed twice"},
     {"VdbNotAnArray", R"({"output": {"vdb": "surface"}})", "output.vdb", "expected an array of strings"},
     {"VdbElementNotString", R"({"output": {"vdb": ["surface", 3]}})", "output.vdb[1]", "expected a string, got 3"},
+    {"ParticleFormatUnknown", R"({"output": {"particle_formats": ["ply", "vtk"]}})", "output.particle_formats[1]",
+     "\"vtk\" is not one of \"ply\" or \"vtp\""},
+    {"ParticleFormatTwice", R"({"output": {"particle_formats": ["vtp", "vtp"]}})", "output.particle_formats[1]",
+     "\"vtp\" is listed twice"},
+    {"ParticleFormatsEmpty", R"({"output": {"particle_formats": []}})", "output.particle_formats",
+     "lists no format: give \"ply\", \"vtp\" or both (a bake writes no particle files with output.particles = "
+     "false)"},
+    {"ParticleFormatsNotAnArray", R"({"output": {"particle_formats": "vtp"}})", "output.particle_formats",
+     "expected an array of strings"},
     {"CompressionUnknown", R"({"output": {"compression": "lz4"}})", "output.compression",
      "\"lz4\" is not one of"},
     {"CompressionNotString", R"({"output": {"compression": true}})", "output.compression", "expected a string"},

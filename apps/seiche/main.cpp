@@ -205,7 +205,7 @@ std::pair<int, int> parse_frame_range(const std::string& text) {
   return {first, last};
 }
 
-// The exporters of the scene, besides the PLY the bake writes itself: the families' (every
+// The exporters of the scene, besides the particle files the bake writes itself: the families' (every
 // cloth's OBJ), and the fluid's .vdb and mesh that the output section asks for. `source` is the
 // file the scene came from (the scene file, or bake.json on a resume), named by export errors.
 std::vector<std::unique_ptr<seiche::FrameExporter>> make_exporters(const seiche::SceneDef& scene, bool resuming,
@@ -346,7 +346,7 @@ int main(int argc, char** argv) {
 
   BakeArgs bake;
   CLI::App* bake_cmd = app.add_subcommand(
-      "bake", "Simulate a scene and write every output it asks for (.ply, .vdb, .obj), with checkpoints");
+      "bake", "Simulate a scene and write every output it asks for (.ply, .vtp, .vdb, .obj), with checkpoints");
   bake_cmd->footer(
       "Stop at any time with Ctrl-C (or SIGTERM): the current frame is finished and checkpointed, and\n"
       "`seiche bake --resume DIR` continues bit for bit. bake.json fingerprints the scene's OBJ meshes: a resume\n"

@@ -1,8 +1,10 @@
 // `seiche bake`: the production run, safe to stop at any time.
 //
 // A bake steps a scene from frame 1 to frame B and writes, for every frame of the range A..B,
-// what the scene's output section asks for: particles.%04d.ply (output.particles) and the files
-// of every exporter (.vdb, .obj, ...; the bake does not know what they hold). Every file is
+// what the scene's output section asks for: the particle files (output.particles, in the formats
+// of output.particle_formats: particles.%04d.ply, particles.%04d.vtp with their series
+// particles.pvd; run/particle_files.hpp) and the files of every exporter (.vdb, .obj, ...; the
+// bake does not know what they hold). Every file is
 // written atomically (write_file_atomically), so a crash, a kill or a full disk never leaves a
 // torn one.
 //
@@ -81,7 +83,7 @@ struct BakeOptions {
   int threads = 0;                ///< 0 = every core
   bool resume =
       false;  ///< continue from out_dir/checkpoint.bin (from frame 1 when none exists yet)
-  std::vector<FrameExporter*> exporters;  ///< writers of the frame files other than the PLY
+  std::vector<FrameExporter*> exporters;  ///< writers of the frame files other than the particles'
   std::ostream* progress = nullptr;       ///< progress lines (stderr in the CLI); null = quiet
   std::ostream* summary = nullptr;        ///< settings, pass table, files written at the end
   /// Set (by a signal handler) to stop after the current frame, with a checkpoint.

@@ -10,7 +10,8 @@
 //   particle store   every particle: the store's columns (ParticleStore: 13 built-in, the fluid's
 //                    2 and vorticity's 3 scratch columns, 3 per shape particle) and the 3 reorder
 //                    spares, 4 bytes each, padded like AlignedColumn; plus a frame's export buffer
-//                    (kExportBytesPerParticle, the PLY's 28 bytes rounded up)
+//                    (kExportBytesPerParticle, the PLY's 28 bytes rounded up, and
+//                    kVtpExportBytesPerParticle, the .vtp's 36, for the formats the scene writes)
 //   fluid            neighbor lists at a bound of twice the rest lattice's neighbor count,
 //                    2 x 4/3 pi (kernel_radius / spacing)^3, 4 bytes each, plus the grid's 13 bytes
 //                    per particle and its cell table (at most 2^24 cells, 4 bytes each)
@@ -34,6 +35,7 @@ namespace seiche {
 
 inline constexpr std::uint64_t kProcessBytes = 40ull << 20;
 inline constexpr std::uint64_t kExportBytesPerParticle = 32;
+inline constexpr std::uint64_t kVtpExportBytesPerParticle = 36;
 inline constexpr std::uint64_t kClothBytesPerVertex = 550;
 inline constexpr std::uint64_t kClothBytesPerTriangle = 300;
 inline constexpr std::uint64_t kSelfContactBytesPerVertex = 900;

@@ -176,7 +176,10 @@ struct ColliderDef {
 struct OutputDef {
   int frames = 60;           ///< number of frames to simulate (>= 1)
   int checkpoint_every = 10; ///< bake: frames between checkpoints of the simulation state (>= 1)
-  bool particles = true;     ///< bake: particles.%04d.ply per frame (`seiche run` always writes them)
+  bool particles = true;     ///< bake: the particle files per frame (`seiche run` always writes them)
+  /// The particle files' formats, from "particle_formats": ["ply", "vtp"] (at least one).
+  bool particles_ply = true;  ///< "ply": particles.%04d.ply
+  bool particles_vtp = false; ///< "vtp": particles.%04d.vtp and their series particles.pvd (ParaView)
   /// bake: the grids of <name>.%04d.vdb, from "vdb": ["surface", "density", "points", "v"];
   /// none = no .vdb files.
   bool vdb_surface = true;   ///< "surface": narrow-band level set of the fluid

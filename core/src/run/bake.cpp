@@ -1,6 +1,7 @@
 // The bake loop (the idea is written at the top of bake.hpp). One frame:
 //   step          sim.step_frame(); stop on a non-finite state (no checkpoint of it)
-//   write         particles.%04d.ply and every exporter's files, if the frame is in the range
+//   write         the particle files (particle_files.hpp) and every exporter's files, if the
+//                 frame is in the range
 //   checkpoint    every output.checkpoint_every frames, at the last frame, and on an interrupt
 //   progress      frame k/N, simulate and export ms per frame, ETA, bytes written
 // A write that fails throws IoError; the message then says which frames and which checkpoint are
@@ -21,6 +22,7 @@
 #include <sstream>
 
 #include "earlier_bake.hpp"
+#include "particle_files.hpp"
 #include "progress.hpp"
 #include "run_report.hpp"
 #include "seiche/kernels/simd_info.hpp"
@@ -215,20 +217,22 @@ std::string resume_command(const fs::path& dir) {
 
 namespace {
 
-// The frame files of one bake: the PLY (if asked) and every exporter's files.
+// The frame files of one bake: the particle files (if asked) and every exporter's files.
 class FrameWriter {
  public:
-  FrameWriter(const SceneDef& scene, const fs::path& dir,
+  FrameWriter(const SceneDef& scene, const fs::path& dir, int first_frame,
               const std::vector<FrameExporter*>& exporters)
-      : scene_(scene), dir_(dir), exporters_(exporters) {}
+      : scene_(scene), dir_(dir), particle_files_(scene, first_frame, scene.output.particles),
+        exporters_(exporters) {}
+
+  const ParticleFiles& particle_files() const { return particle_files_; }
 
   /// Writes frame `frame` of `sim`; returns the bytes written.
   std::uint64_t write(const Simulation& sim, int frame, std::size_t& files) {
     std::uint64_t bytes = 0;
-    if (scene_.output.particles) {
-      const std::string ply = encode_particles_ply(sim.particles());
-      write_file_atomically(dir_ / frame_file_name("particles", frame, "ply"), ply);
-      bytes += ply.size();
+    for (const FrameExporter::EncodedFile& file : particle_files_.encode(sim.particles(), frame)) {
+      write_file_atomically(dir_ / file.name, file.bytes);
+      bytes += file.bytes.size();
       ++files;
     }
     const FrameView view{sim.particles(), scene_, frame, sim.time()};
@@ -241,8 +245,7 @@ class FrameWriter {
 
   /// The names of frame `frame`'s files, relative to the folder.
   std::vector<std::string> files(int frame) const {
-    std::vector<std::string> names;
-    if (scene_.output.particles) names.push_back(frame_file_name("particles", frame, "ply"));
+    std::vector<std::string> names = particle_files_.frame_names(frame);
     for (const FrameExporter* e : exporters_)
       for (const fs::path& f : e->files(frame)) names.push_back(f.string());
     return names;
@@ -250,13 +253,10 @@ class FrameWriter {
 
   /// "particles.0001.ply .. particles.0020.ply", one line per kind of file.
   std::vector<std::string> describe(int first, int last) const {
-    std::vector<std::string> lines;
+    std::vector<std::string> lines = particle_files_.describe(first, last);
     auto range = [&](const std::string& a, const std::string& b) {
       return first == last ? a : a + " .. " + b;
     };
-    if (scene_.output.particles)
-      lines.push_back(range(frame_file_name("particles", first, "ply"),
-                            frame_file_name("particles", last, "ply")));
     for (const FrameExporter* e : exporters_) {
       const auto a = e->files(first), b = e->files(last);
       for (std::size_t k = 0; k < a.size() && k < b.size(); ++k)
@@ -268,6 +268,7 @@ class FrameWriter {
  private:
   const SceneDef& scene_;
   fs::path dir_;
+  ParticleFiles particle_files_;
   const std::vector<FrameExporter*>& exporters_;
 };
 
@@ -333,12 +334,20 @@ BakeResult bake_on_threads(const SceneDef& scene, const BakeRecipe& recipe,
   }
   // Every place the bake writes: the frame files lie inside the folder; the folder, the report
   // and the checkpoint can be written (bake.json is written below, a real write test).
+  FrameWriter writer(scene, dir, recipe.first_frame, options.exporters);
+  writer.particle_files().check_names_inside(dir, recipe.first_frame, recipe.last_frame);
   for (const FrameExporter* e : options.exporters)
     check_frame_files_inside(*e, dir, recipe.first_frame, recipe.last_frame);
   prepare_output_directory(dir);
   check_output_file_writable(dir / kBakeReportFile);
   check_output_file_writable(checkpoint_file);
-  FrameWriter writer(scene, dir, options.exporters);
+  // The particle series lists this bake's frames up to its checkpoint before anything else is
+  // written (an earlier or a killed bake's series is replaced; particle_files.hpp).
+  if (writer.particle_files().writes_series()) {
+    const FrameExporter::EncodedFile series = writer.particle_files().encode_series(result.start_frame);
+    write_file_atomically(dir / series.name, series.bytes);
+    result.bytes_written += series.bytes.size();
+  }
   // A new bake replaces an earlier one in the folder: none of its frames may stay beside ours.
   if (!options.resume)
     remove_earlier_bake_frames(

@@ -96,8 +96,10 @@ MemoryEstimate estimate_scene_memory(const SceneDef& scene) {
   if (!scene.fluids.empty()) columns += kFluidColumns + (vorticity ? kVorticityColumns : 0);
   if (!scene.shapes.empty()) columns += kShapeColumns;
   e.particle_store = columns * column_bytes(n);
-  e.items.push_back({"", fmt::format("particle store ({} particles)", n),
-                     e.particle_store + kExportBytesPerParticle * n});
+  // A frame's particle files, encoded together (particle_files.hpp).
+  const std::uint64_t export_bytes = (scene.output.particles_ply ? kExportBytesPerParticle : 0) +
+                                     (scene.output.particles_vtp ? kVtpExportBytesPerParticle : 0);
+  e.items.push_back({"", fmt::format("particle store ({} particles)", n), e.particle_store + export_bytes * n});
 
   for (std::size_t k = 0; k < scene.fluids.size(); ++k) {
     const FluidDef& f = scene.fluids[k];

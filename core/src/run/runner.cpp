@@ -7,6 +7,7 @@
 #include <fmt/ostream.h>
 
 #include "background_writer.hpp"
+#include "particle_files.hpp"
 #include "progress.hpp"
 #include "run_report.hpp"
 #include "seiche/frame_exporter.hpp"
@@ -47,11 +48,13 @@ RunResult run_on_threads(const SceneDef& scene, const RunOptions& options, int t
 
   Simulation sim(scene);  // before any folder is made: a scene that cannot be built writes nothing
   const std::vector<std::unique_ptr<FrameExporter>> exporters = family_exporters(scene);  // the cloths' OBJ
+  const ParticleFiles particle_files(scene, 1, /*enabled=*/true);  // a run writes them always
   // Every place the run writes is checked before the first frame: the frame files lie inside the
   // folder, the folder and the report can be written (a report into /proc or onto a folder fails
   // here, not after the simulation).
   if (!options.report.empty()) check_output_file_writable(options.report);
   if (!options.out_dir.empty()) {
+    particle_files.check_names_inside(options.out_dir, 1, frames);
     for (const auto& e : exporters) check_frame_files_inside(*e, options.out_dir, 1, frames);
     prepare_output_directory(options.out_dir);
   }
@@ -64,11 +67,12 @@ RunResult run_on_threads(const SceneDef& scene, const RunOptions& options, int t
     if (!options.report.empty()) write_file_atomically(options.report, report.dump());
   };
 
-  // A frame's files (the PLY, then each family exporter's: each cloth's OBJ) go to disk while the
-  // next frame is simulated; before a frame counts, the previous frame's files are on disk. So a
-  // failed write stops the run one frame later at most, before anything of the next frame is
-  // recorded or written, and every frame before the failed one is complete.
-  std::size_t files_per_frame = 1;
+  // A frame's files (the particle files, then each family exporter's: each cloth's OBJ) go to
+  // disk while the next frame is simulated, in that order; before a frame counts, the previous
+  // frame's files are on disk. So a failed write stops the run one frame later at most, before
+  // anything of the next frame is recorded or written, and every frame before the failed one is
+  // complete.
+  std::size_t files_per_frame = particle_files.files_per_frame();
   for (const auto& e : exporters) files_per_frame += e->files(1).size();
   BackgroundWriter frame_files(files_per_frame);
   const auto start = Clock::now();
@@ -87,7 +91,8 @@ RunResult run_on_threads(const SceneDef& scene, const RunOptions& options, int t
       result.metrics.push_back(m);
       throw_if_diverged(m, f);
       if (!options.out_dir.empty()) {
-        submit(options.out_dir / frame_file_name("particles", f, "ply"), encode_particles_ply(sim.particles()));
+        for (FrameExporter::EncodedFile& file : particle_files.encode(sim.particles(), f))
+          submit(options.out_dir / file.name, std::move(file.bytes));
         for (const auto& e : exporters)
           for (FrameExporter::EncodedFile& file : e->encode_frame({sim.particles(), scene, f, sim.time()}))
             submit(options.out_dir / file.name, std::move(file.bytes));
@@ -119,9 +124,11 @@ RunResult run_on_threads(const SceneDef& scene, const RunOptions& options, int t
   write_report();
   if (options.summary) {
     print_run_summary(*options.summary, scene, result, pipeline);
-    if (!options.out_dir.empty())
-      fmt::print(*options.summary, "\noutput: {}/particles.0001.ply .. {}\n",
-                 options.out_dir.string(), frame_file_name("particles", result.frames, "ply"));
+    if (!options.out_dir.empty()) {
+      fmt::print(*options.summary, "\noutput: {}\n", options.out_dir.string());
+      for (const std::string& line : particle_files.describe(1, result.frames))
+        fmt::print(*options.summary, "  {}\n", line);
+    }
     if (!options.report.empty())
       fmt::print(*options.summary, "report: {}\n", options.report.string());
   }

@@ -96,7 +96,17 @@ const KeyTable<OutputDef>& output_keys() {
       K("frames", &OutputDef::frames, Range::at_least(1)).doc("number of frames to simulate"),
       K("checkpoint_every", &OutputDef::checkpoint_every, Range::at_least(1))
           .doc("bake: frames between checkpoints of the simulation state (`seiche bake --resume`)"),
-      K("particles", &OutputDef::particles).doc("bake: `particles.%04d.ply` per frame"),
+      K("particles", &OutputDef::particles)
+          .doc("bake: the particle files of `particle_formats` per frame; `false` writes none (`seiche run` "
+               "writes them always)"),
+      nested<OutputDef>("particle_formats", "array of strings")
+          .default_text("`[\"ply\"]`")
+          .valid_note("one or both of `\"ply\"`, `\"vtp\"`, each at most once")
+          .doc("the formats of the particle files, each in id order with position, velocity and id: "
+               "`\"ply\"` `particles.%04d.ply` (binary PLY: Blender, Houdini); `\"vtp\"` "
+               "`particles.%04d.vtp` (VTK XML PolyData) and `particles.pvd`, the series of the .vtp "
+               "frames with their times, which ParaView opens as one time series with `velocity` and "
+               "`id` point arrays"),
       nested<OutputDef>("vdb", "array of strings")
           .default_text("`[\"surface\", \"density\"]`")
           .valid_note("each of `\"surface\"`, `\"density\"`, `\"points\"`, `\"v\"`, at most once")
@@ -118,17 +128,27 @@ const KeyTable<OutputDef>& output_keys() {
   return keys;
 }
 
+bool lists(const std::vector<std::string>& names, std::string_view name) {
+  return std::find(names.begin(), names.end(), name) != names.end();
+}
+
 void read_output(JsonReader r, SceneDef& scene) {
   OutputDef o;
   read_keys(r, output_keys(), o);
   std::vector<std::string> grids{"surface", "density"};
   r.read_string_set("vdb", grids, {"surface", "density", "points", "v"});
+  std::vector<std::string> formats{"ply"};
+  r.read_string_set("particle_formats", formats, {"ply", "vtp"});
+  if (formats.empty())
+    r.fail_at("particle_formats", "lists no format: give \"ply\", \"vtp\" or both (a bake writes no "
+                                  "particle files with output.particles = false)");
   r.finish();
-  auto listed = [&](const char* g) { return std::find(grids.begin(), grids.end(), g) != grids.end(); };
-  o.vdb_surface = listed("surface");
-  o.vdb_density = listed("density");
-  o.vdb_points = listed("points");
-  o.vdb_velocity = listed("v");
+  o.vdb_surface = lists(grids, "surface");
+  o.vdb_density = lists(grids, "density");
+  o.vdb_points = lists(grids, "points");
+  o.vdb_velocity = lists(grids, "v");
+  o.particles_ply = lists(formats, "ply");
+  o.particles_vtp = lists(formats, "vtp");
   scene.output = o;
 }
 
