@@ -88,8 +88,9 @@ RunResult run_on_threads(const SceneDef& scene, const RunOptions& options, int t
       throw_if_diverged(m, f);
       if (!options.out_dir.empty()) {
         submit(options.out_dir / frame_file_name("particles", f, "ply"), encode_particles_ply(sim.particles()));
+        const std::vector<BodyPose> bodies = sim.body_poses();
         for (const auto& e : exporters)
-          for (FrameExporter::EncodedFile& file : e->encode_frame({sim.particles(), scene, f, sim.time()}))
+          for (FrameExporter::EncodedFile& file : e->encode_frame({sim.particles(), scene, f, sim.time(), bodies}))
             submit(options.out_dir / file.name, std::move(file.bytes));
       }
       result.frames = f;
