@@ -104,23 +104,33 @@ struct RigidBodyDef {
 };
 
 /// One entry of "joints": a joint between two rigid bodies, or a body and the world (XPBD with
-/// compliance, from connector points; core/src/families/rigid/joint.hpp). Anchor and axis are
+/// compliance, from connector points; core/src/families/rigid/joint.hpp). Anchors and axis are
 /// given in the world frame at the start; each body keeps them in its own frame.
 struct JointDef {
-  std::string type = "ball";          ///< "ball", "hinge" or "fixed"
+  std::string type = "ball";          ///< "ball", "hinge", "fixed", "distance" or "slider"
   std::string body_a = "world";       ///< a body's name or "world"
   std::string body_b;                 ///< required: a body's name
-  Vec3 anchor{0.0f, 0.0f, 0.0f};      ///< m, required: the connector point, world frame at the start
-  Vec3 axis{0.0f, 0.0f, 1.0f};        ///< hinge: its axis, world frame at the start (not zero)
+  Vec3 anchor{0.0f, 0.0f, 0.0f};      ///< m, required: the connector point (of body_a for distance)
+  Vec3 anchor_b{0.0f, 0.0f, 0.0f};    ///< distance: body_b's point (m), when has_anchor_b; else anchor
+  Vec3 axis{0.0f, 0.0f, 1.0f};        ///< hinge, slider: the axis, world frame at the start (not zero)
   /// hinge: the range of the angle of body_b about the axis relative to body_a, degrees from the
   /// start (lower <= upper, in [-180, 180]); only when has_limits.
   std::array<float, 2> limits{-180.0f, 180.0f};
+  /// distance: the range of |P_b - P_a| (m, 0 <= min <= max), when has_distance; else the
+  /// distance at the start, both ways (a rod).
+  std::array<float, 2> distance{0.0f, 0.0f};
+  /// slider: the range of body_b's travel along the axis from the start (m, lower <= upper),
+  /// when has_travel; else free along the axis.
+  std::array<float, 2> travel{0.0f, 0.0f};
   float target_angle = 0.0f;          ///< hinge motor: degrees, when has_target_angle
   float target_velocity = 0.0f;       ///< hinge motor: degrees/s, when has_target_velocity
   float compliance = 0.0f;            ///< m/N and rad/(N m) (>= 0); 0 = rigid
   float motor_compliance = 0.0f;      ///< rad/(N m) (>= 0); 0 = a rigid drive
   // Not keys: which of the optional keys the scene gave.
+  bool has_anchor_b = false;
   bool has_limits = false;
+  bool has_distance = false;
+  bool has_travel = false;
   bool has_target_angle = false;
   bool has_target_velocity = false;
 };

@@ -12,6 +12,10 @@
 //           e = wrap(phi - target) a_a with the motor's own compliance.
 //   fixed   q_b = q_a q_rest (q_rest = q_a^-1 q_b at the start): e = log(q_b (q_a q_rest)^-1);
 //           then P_b = P_a.
+//   distance  |P_b - P_a| in [min, max] (P_a and P_b each body's own point): when outside, the
+//           positional error d = (|d| - clamp(|d|, min, max)) d / |d|, d = P_b - P_a.
+//   slider  the orientation as for fixed; then P_b - P_a = s a_a with s in [lower, upper] (or
+//           any s without limits): the positional error d - clamp(d . a_a, lower, upper) a_a.
 // A body index of -1 is the world (a fixed body at the origin, unrotated), whose "body frame" is
 // the world frame.
 // The joints are solved serially in scene order (Gauss-Seidel), each correction seeing the
@@ -27,19 +31,20 @@
 
 namespace seiche::rigid {
 
-enum class JointType { Ball, Hinge, Fixed };
+enum class JointType { Ball, Hinge, Fixed, Distance, Slider };
 enum class MotorMode { None, Angle, Velocity };
 
 struct Joint {
   JointType type = JointType::Ball;
   int body_a = -1, body_b = -1;  ///< indices into the bodies; -1: the world
   Vec3d anchor_a, anchor_b;      ///< the connector point in each body's frame
-  Vec3d axis_a, axis_b;          ///< hinge: its unit axis u in each body's frame
+  Vec3d axis_a, axis_b;          ///< hinge, slider: the unit axis u in each body's frame
   Vec3d normal_a, normal_b;      ///< hinge: a unit s perpendicular to u, in each body's frame
-  Quatd rest_rotation;           ///< fixed: q_a^-1 q_b at the start
+  Quatd rest_rotation;           ///< fixed, slider: q_a^-1 q_b at the start
   double compliance = 0.0;       ///< m/N and rad/(N m)
-  bool limited = false;
-  double lower = 0.0, upper = 0.0;  ///< rad
+  bool limited = false;             ///< hinge: angle limits; slider: travel limits
+  double lower = 0.0, upper = 0.0;  ///< hinge: rad; slider: m along the axis
+  double min_distance = 0.0, max_distance = 0.0;  ///< distance (m)
   MotorMode motor = MotorMode::None;
   double target = 0.0;              ///< rad (Angle) or rad/s (Velocity)
   double motor_compliance = 0.0;    ///< rad/(N m)
@@ -66,9 +71,10 @@ class JointSolver {
   /// One iteration: every joint once, in order.
   void solve(std::span<RigidBody> bodies, double h);
 
-  /// A joint's errors on the bodies as they are: |P_b - P_a| (m) and its angular error (rad:
-  /// the hinge's axis misalignment plus how far phi is outside its limits; the fixed joint's
-  /// rotation off its rest; 0 for a ball).
+  /// A joint's errors on the bodies as they are: the length of its positional error (m: |P_b -
+  /// P_a|, for a distance joint how far outside its range, for a slider off its axis or range)
+  /// and its angular error (rad: the hinge's axis misalignment plus how far phi is outside its
+  /// limits; the fixed joint's and slider's rotation off its rest; 0 for ball and distance).
   struct Error {
     double distance = 0.0;
     double angle = 0.0;

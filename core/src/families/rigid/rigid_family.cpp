@@ -38,6 +38,14 @@ int body_index(const SceneDef& scene, const std::string& name) {
   return -1;  // "world" (the reader has checked every other name)
 }
 
+JointType joint_type_of(const std::string& type) {
+  if (type == "hinge") return JointType::Hinge;
+  if (type == "fixed") return JointType::Fixed;
+  if (type == "distance") return JointType::Distance;
+  if (type == "slider") return JointType::Slider;
+  return JointType::Ball;
+}
+
 // A unit vector perpendicular to unit u.
 Vec3d perpendicular(Vec3d u) {
   const Vec3d other = std::fabs(u.x) < 0.6 ? Vec3d{1.0, 0.0, 0.0} : Vec3d{0.0, 1.0, 0.0};
@@ -63,27 +71,37 @@ std::vector<Joint> make_joints(const SceneDef& scene, const std::vector<RigidBod
   std::vector<Joint> joints;
   for (const JointDef& d : scene.joints) {
     Joint j;
-    j.type = d.type == "hinge" ? JointType::Hinge : d.type == "fixed" ? JointType::Fixed : JointType::Ball;
+    j.type = joint_type_of(d.type);
     j.body_a = body_index(scene, d.body_a);
     j.body_b = body_index(scene, d.body_b);
     const RigidBody& a = j.body_a < 0 ? world : bodies[std::size_t(j.body_a)];
     const RigidBody& b = j.body_b < 0 ? world : bodies[std::size_t(j.body_b)];
     const Vec3d anchor = to_d(d.anchor);
+    const Vec3d anchor_b = d.has_anchor_b ? to_d(d.anchor_b) : anchor;
     j.anchor_a = rotate_back(a.q, anchor - a.x);
-    j.anchor_b = rotate_back(b.q, anchor - b.x);
+    j.anchor_b = rotate_back(b.q, anchor_b - b.x);
     const Vec3d axis = rigid::normalized_or_zero(to_d(d.axis));
     const Vec3d normal = perpendicular(axis);
     j.axis_a = rotate_back(a.q, axis), j.axis_b = rotate_back(b.q, axis);
     j.normal_a = rotate_back(a.q, normal), j.normal_b = rotate_back(b.q, normal);
     j.rest_rotation = conjugate(a.q) * b.q;
     j.compliance = d.compliance;
-    j.limited = d.has_limits;
-    j.lower = d.limits[0] * kRadiansPerDegree, j.upper = d.limits[1] * kRadiansPerDegree;
+    if (j.type == JointType::Hinge) {
+      j.limited = d.has_limits;
+      j.lower = d.limits[0] * kRadiansPerDegree, j.upper = d.limits[1] * kRadiansPerDegree;
+    } else if (j.type == JointType::Slider) {
+      j.limited = d.has_travel;
+      j.lower = d.travel[0], j.upper = d.travel[1];
+    }
+    const double start_distance = length(anchor_b - anchor);
+    j.min_distance = d.has_distance ? d.distance[0] : start_distance;
+    j.max_distance = d.has_distance ? d.distance[1] : start_distance;
     if (d.has_target_angle) j.motor = MotorMode::Angle, j.target = d.target_angle * kRadiansPerDegree;
     if (d.has_target_velocity) j.motor = MotorMode::Velocity, j.target = d.target_velocity * kRadiansPerDegree;
     j.motor_compliance = d.motor_compliance;
-    // The joint's length: how far its bodies reach from the anchor (at least a body's size).
-    double reach = 0.0;
+    // The joint's length: how far its bodies reach from the anchor (at least a body's size, and
+    // a distance joint's longest distance).
+    double reach = j.type == JointType::Distance ? j.max_distance : 0.0;
     for (int k : {j.body_a, j.body_b})
       if (k >= 0) reach = std::max({reach, length(bodies[std::size_t(k)].x - anchor), extent[std::size_t(k)]});
     j.length = reach > 0.0 ? reach : 1.0;
@@ -154,7 +172,7 @@ void RigidFamily::measure(FrameMetrics& m) {
       const rigid::JointSolver::Error e = joints_.error(j, bodies_);
       const double drift = e.distance / j.length;
       drift_sum += drift, drift_max = std::max(drift_max, drift);
-      if (j.type == JointType::Ball) continue;
+      if (j.type == JointType::Ball || j.type == JointType::Distance) continue;
       ++angular;
       angle_sum += e.angle, angle_max = std::max(angle_max, e.angle);
     }

@@ -11,8 +11,8 @@
 //            multipliers and motor start angles live within a substep, so are not state
 // Passes: "body predict" (Predict, kBodyPredict) and "body update" (Update, kBodyUpdate);
 // with joints, a reset (BeginSubstep, kJointReset) and "joints" every iteration (kJoints).
-// Error rows: "joint_drift" (|P_b - P_a| relative to each joint's length), "joint_angle_error"
-// (radians; hinge and fixed joints), "body_energy" (|E - E_0| / E_0, E the bodies' kinetic plus
+// Error rows: "joint_drift" (each joint's positional error, JointSolver::error, relative to its
+// length), "joint_angle_error" (radians; hinge, fixed and slider joints), "body_energy" (|E - E_0| / E_0, E the bodies' kinetic plus
 // gravitational energy, zero at the domain's lowest corner as for the particles).
 #pragma once
 
