@@ -58,7 +58,7 @@ class FrameExporter {
 };
 
 /// The exporters of the scene's families, in the registry's order (core/src/loop/
-/// family_registry.cpp): every cloth's OBJ today. The fluid's .vdb and mesh exporter lives in
+/// family_registry.cpp): every cloth's OBJ and the rigid bodies' bodies.%04d.jsonl today. The fluid's .vdb and mesh exporter lives in
 /// its own target (it links OpenVDB) and the app adds it.
 std::vector<std::unique_ptr<FrameExporter>> family_exporters(const SceneDef& scene);
 
