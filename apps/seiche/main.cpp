@@ -206,7 +206,7 @@ std::pair<int, int> parse_frame_range(const std::string& text) {
 }
 
 // The exporters of the scene, besides the particle files the bake writes itself: the families' (every
-// cloth's OBJ), and the fluid's .vdb and mesh that the output section asks for. `source` is the
+// cloth's OBJ, the rigid bodies' JSON lines), and the fluid's .vdb and mesh that the output section asks for. `source` is the
 // file the scene came from (the scene file, or bake.json on a resume), named by export errors.
 std::vector<std::unique_ptr<seiche::FrameExporter>> make_exporters(const seiche::SceneDef& scene, bool resuming,
                                                                    const std::string& source) {

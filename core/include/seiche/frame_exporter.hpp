@@ -4,9 +4,11 @@
 // interface.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -15,6 +17,14 @@
 
 namespace seiche {
 
+/// A rigid body's state at the end of a frame (scene.rigid_bodies order), world frame.
+struct BodyPose {
+  std::array<double, 3> position{};          ///< centre of mass (m)
+  std::array<double, 4> orientation{1, 0, 0, 0};  ///< unit quaternion [w, x, y, z], body to world
+  std::array<double, 3> velocity{};          ///< m/s
+  std::array<double, 3> angular_velocity{};  ///< rad/s
+};
+
 /// One finished frame, as an exporter sees it. The store is in cell order; store.id gives the
 /// creation order that every export must follow.
 struct FrameView {
@@ -22,6 +32,7 @@ struct FrameView {
   const SceneDef& scene;
   int frame = 0;      ///< 1-based frame number
   double time = 0.0;  ///< simulated time at the end of the frame (s)
+  std::span<const BodyPose> bodies = {};  ///< every rigid body (Simulation::body_poses)
 };
 
 class FrameExporter {
@@ -47,7 +58,7 @@ class FrameExporter {
 };
 
 /// The exporters of the scene's families, in the registry's order (core/src/loop/
-/// family_registry.cpp): every cloth's OBJ today. The fluid's .vdb and mesh exporter lives in
+/// family_registry.cpp): every cloth's OBJ and the rigid bodies' bodies.%04d.jsonl today. The fluid's .vdb and mesh exporter lives in
 /// its own target (it links OpenVDB) and the app adds it.
 std::vector<std::unique_ptr<FrameExporter>> family_exporters(const SceneDef& scene);
 

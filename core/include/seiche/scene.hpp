@@ -84,6 +84,57 @@ struct ShapeDef {
   Vec3 velocity{0.0f, 0.0f, 0.0f};  ///< m/s, initial velocity of every particle
 };
 
+/// One entry of "rigid_bodies": a rigid body with its own state (position, orientation, linear
+/// and angular velocity; core/src/families/rigid/), not particles. Its mass and its inertia
+/// tensor (diagonal in the body frame) follow from shape, size and density. At rest orientation
+/// a box's edges lie along x, y, z and a capsule's axis along y.
+struct RigidBodyDef {
+  std::string name;                   ///< required, unique ignoring case, not "world"
+  std::string shape = "box";          ///< "box", "sphere" or "capsule"
+  Vec3 size{0.1f, 0.1f, 0.1f};        ///< box: edge lengths along the body's x, y, z (m, > 0)
+  float radius = 0.05f;               ///< sphere, capsule (m, > 0)
+  float length = 0.1f;                ///< capsule: length of its cylinder, along the body's y (m, > 0)
+  float density = 1000.0f;            ///< kg/m^3 in (0, 1e5]
+  Vec3 position{0.0f, 0.0f, 0.0f};    ///< m, required: the centre of mass, inside the domain
+  Vec3 axis{0.0f, 1.0f, 0.0f};        ///< orientation: `angle` degrees about `axis` (world frame)
+  float angle = 0.0f;                 ///< degrees
+  Vec3 velocity{0.0f, 0.0f, 0.0f};    ///< m/s, of the centre of mass
+  Vec3 angular_velocity{0.0f, 0.0f, 0.0f};  ///< rad/s, world frame
+  bool fixed = false;                 ///< never moves (infinite mass): an anchor for joints
+};
+
+/// One entry of "joints": a joint between two rigid bodies, or a body and the world (XPBD with
+/// compliance, from connector points; core/src/families/rigid/joint.hpp). Anchors and axis are
+/// given in the world frame at the start; each body keeps them in its own frame.
+struct JointDef {
+  std::string type = "ball";          ///< "ball", "hinge", "fixed", "distance" or "slider"
+  std::string body_a = "world";       ///< a body's name or "world"
+  std::string body_b;                 ///< required: a body's name
+  Vec3 anchor{0.0f, 0.0f, 0.0f};      ///< m, required: the connector point (of body_a for distance)
+  Vec3 anchor_b{0.0f, 0.0f, 0.0f};    ///< distance: body_b's point (m), when has_anchor_b; else anchor
+  Vec3 axis{0.0f, 0.0f, 1.0f};        ///< hinge, slider: the axis, world frame at the start (not zero)
+  /// hinge: the range of the angle of body_b about the axis relative to body_a, degrees from the
+  /// start (lower <= upper, in [-180, 180]); only when has_limits.
+  std::array<float, 2> limits{-180.0f, 180.0f};
+  /// distance: the range of |P_b - P_a| (m, 0 <= min <= max), when has_distance; else the
+  /// distance at the start, both ways (a rod).
+  std::array<float, 2> distance{0.0f, 0.0f};
+  /// slider: the range of body_b's travel along the axis from the start (m, lower <= upper),
+  /// when has_travel; else free along the axis.
+  std::array<float, 2> travel{0.0f, 0.0f};
+  float target_angle = 0.0f;          ///< hinge motor: degrees, when has_target_angle
+  float target_velocity = 0.0f;       ///< hinge motor: degrees/s, when has_target_velocity
+  float compliance = 0.0f;            ///< m/N and rad/(N m) (>= 0); 0 = rigid
+  float motor_compliance = 0.0f;      ///< rad/(N m) (>= 0); 0 = a rigid drive
+  // Not keys: which of the optional keys the scene gave.
+  bool has_anchor_b = false;
+  bool has_limits = false;
+  bool has_distance = false;
+  bool has_travel = false;
+  bool has_target_angle = false;
+  bool has_target_velocity = false;
+};
+
 /// One entry of "particles": a raw particle (for raw constraints and worked examples).
 struct ParticleDef {
   Vec3 x{0.0f, 0.0f, 0.0f};  ///< m, required, inside the domain
@@ -207,6 +258,8 @@ struct SceneDef {
   std::vector<ColliderDef> colliders;
   std::vector<ClothDef> cloths;
   std::vector<ShapeDef> shapes;
+  std::vector<RigidBodyDef> rigid_bodies;
+  std::vector<JointDef> joints;
   /// The scene file's folder: relative OBJ paths are resolved against it ("" for scene text).
   std::string base_dir;
 };

@@ -40,6 +40,8 @@ class Family;
 class FluidFamily;
 class DistanceFamily;
 class ClothFamily;
+class RigidFamily;
+struct BodyPose;
 class IterationRecord;
 struct Pass;
 
@@ -80,6 +82,9 @@ class Simulation {
   const ClothSolver* cloth() const;
   /// The raw distance constraints, or null when the scene has none.
   const DistanceSolver* distance() const;
+  /// Every rigid body's position, orientation and velocities now, in scene order (empty
+  /// without bodies).
+  std::vector<BodyPose> body_poses() const;
   /// How many particles were created outside the domain and moved to its nearest point (only
   /// a scene built in code can do that: the scene loader rejects such files).
   std::size_t moved_into_domain() const { return moved_into_domain_; }
@@ -133,6 +138,7 @@ class Simulation {
   FluidFamily* fluid_ = nullptr;
   DistanceFamily* distance_ = nullptr;
   ClothFamily* cloth_ = nullptr;
+  RigidFamily* rigid_ = nullptr;
   // Every family's passes, sorted by (stage, order); stage s runs passes_[stage_begin_[s],
   // stage_begin_[s + 1]).
   std::vector<Pass> passes_;

@@ -41,10 +41,12 @@ inline constexpr int kStageCount = int(Stage::Velocity) + 1;
 /// Where each pass runs within its stage, ascending: every family's keys in one table.
 namespace pass_order {
 inline constexpr int kPredict = 0;           // Predict
+inline constexpr int kBodyPredict = 10;      //   rigid bodies: their own state, not particles
 inline constexpr int kFluidNeighbors = 0;    // Neighbors: reorders the store, so it comes first
 inline constexpr int kContactPairs = 10;     //   reads the fluid's grid of this substep
 inline constexpr int kDistanceReset = 0;     // BeginSubstep
 inline constexpr int kClothReset = 10;
+inline constexpr int kJointReset = 20;
 inline constexpr int kFluidDensity = 0;      // Iterate
 inline constexpr int kDistance = 10;
 inline constexpr int kClothStretchForests = 19;  // on the columns, before the colored edges
@@ -53,8 +55,10 @@ inline constexpr int kClothBending = 21;
 inline constexpr int kTethers = 22;
 inline constexpr int kParticleContacts = 30;
 inline constexpr int kShapeMatching = 40;    //   after the contacts: its clusters end rigid
+inline constexpr int kJoints = 50;           //   rigid bodies only (no particle is moved)
 inline constexpr int kCollisions = 100;      //   last: nothing is pushed into a collider after it
 inline constexpr int kUpdate = 0;            // Update
+inline constexpr int kBodyUpdate = 10;
 inline constexpr int kDamping = 0;           // Velocity
 inline constexpr int kVorticity = 10;
 inline constexpr int kViscosity = 20;

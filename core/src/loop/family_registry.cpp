@@ -4,12 +4,14 @@
 #include "family_registry.hpp"
 
 #include "families/cloth/cloth_family.hpp"
+#include "seiche/body_exporter.hpp"
 #include "seiche/cloth_obj_exporter.hpp"
 #include "families/collider/collider_family.hpp"
 #include "families/contact/contact_family.hpp"
 #include "families/distance/distance_family.hpp"
 #include "families/fluid/fluid_family.hpp"
 #include "families/motion/motion_family.hpp"
+#include "families/rigid/rigid_family.hpp"
 #include "families/shape/shape_family.hpp"
 
 namespace seiche {
@@ -79,6 +81,12 @@ void build_distance(FamilyBuild& b) {
 
 void build_colliders(FamilyBuild& b) { b.add(std::make_unique<ColliderFamily>(b.scene, b.store)); }
 
+// Rigid bodies are not particles: they have their own state, and their joints join only them.
+void build_rigid(FamilyBuild& b) {
+  if (b.scene.rigid_bodies.empty()) return;
+  b.add(std::make_unique<RigidFamily>(b.scene));
+}
+
 constexpr FamilyRow kRows[] = {
     {"motion", Phase::Particles, build_motion},
     {"particles", Phase::Particles, build_raw_particles},
@@ -88,6 +96,7 @@ constexpr FamilyRow kRows[] = {
     {"cloths", Phase::OnParticles, build_contact},
     {"distance_constraints", Phase::OnParticles, build_distance},
     {"colliders", Phase::OnParticles, build_colliders},
+    {"rigid_bodies", Phase::OnParticles, build_rigid, make_body_exporter},
 };
 
 }  // namespace

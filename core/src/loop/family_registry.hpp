@@ -6,7 +6,8 @@
 //      go after the existing ones and leave their ids alone;
 //   2. every particle created outside the domain is moved to its nearest point in it;
 //   3. the OnParticles rows, in table order: families over particles that exist (contacts, raw
-//      distance constraints, whose rest lengths are the distances after step 2, colliders).
+//      distance constraints, whose rest lengths are the distances after step 2, colliders), and
+//      the rigid bodies, which are not particles (their own state, joined only by their joints).
 // A row whose section the scene lacks adds nothing: a family absent from a scene costs nothing.
 // The order of the families built is the order of their error rows in reports, and breaks ties
 // between equal pass keys (pass_order in family.hpp). A row may also name the family's exporter
@@ -66,7 +67,7 @@ struct FamilyRow {
   const char* name;  ///< the scene section it builds from ("motion": every scene)
   Phase phase;
   void (*build)(FamilyBuild& build);
-  /// The family's frame files besides the PLY every bake writes (the cloths' OBJ), or null when
+  /// The family's frame files besides the PLY every bake writes (the cloths' OBJ, the bodies' JSON lines), or null when
   /// it has none; the maker returns null when the scene lacks the section.
   std::unique_ptr<FrameExporter> (*exporter)(const SceneDef& scene) = nullptr;
 };

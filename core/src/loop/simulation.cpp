@@ -8,6 +8,7 @@
 #include "families/cloth/cloth_family.hpp"
 #include "families/distance/distance_family.hpp"
 #include "families/fluid/fluid_family.hpp"
+#include "families/rigid/rigid_family.hpp"
 #include "family.hpp"
 #include "family_registry.hpp"
 #include "iteration_record.hpp"
@@ -45,6 +46,7 @@ void Simulation::create_families() {
   fluid_ = build.find<FluidFamily>();
   distance_ = build.find<DistanceFamily>();
   cloth_ = build.find<ClothFamily>();
+  rigid_ = build.find<RigidFamily>();
 }
 
 // A particle created outside the domain would be projected onto its wall by the first substep,
@@ -85,6 +87,10 @@ void Simulation::assemble_pipeline() {
 
 const ClothSolver* Simulation::cloth() const { return cloth_ ? &cloth_->solver() : nullptr; }
 const DistanceSolver* Simulation::distance() const { return distance_ ? &distance_->solver() : nullptr; }
+
+std::vector<BodyPose> Simulation::body_poses() const {
+  return rigid_ ? rigid_->poses() : std::vector<BodyPose>{};
+}
 
 std::vector<std::string> Simulation::pipeline() const {
   // A family's work split over consecutive passes by layout under one name (cloth stretch: the

@@ -235,7 +235,8 @@ class FrameWriter {
       bytes += file.bytes.size();
       ++files;
     }
-    const FrameView view{sim.particles(), scene_, frame, sim.time()};
+    const std::vector<BodyPose> bodies = sim.body_poses();
+    const FrameView view{sim.particles(), scene_, frame, sim.time(), bodies};
     for (FrameExporter* e : exporters_) {
       bytes += e->write_frame(view, dir_);
       files += e->files(frame).size();

@@ -47,7 +47,7 @@ RunResult run_on_threads(const SceneDef& scene, const RunOptions& options, int t
   const int frames = options.frames > 0 ? options.frames : scene.output.frames;
 
   Simulation sim(scene);  // before any folder is made: a scene that cannot be built writes nothing
-  const std::vector<std::unique_ptr<FrameExporter>> exporters = family_exporters(scene);  // the cloths' OBJ
+  const std::vector<std::unique_ptr<FrameExporter>> exporters = family_exporters(scene);  // cloth OBJ, bodies
   const ParticleFiles particle_files(scene, 1, /*enabled=*/true);  // a run writes them always
   // Every place the run writes is checked before the first frame: the frame files lie inside the
   // folder, the folder and the report can be written (a report into /proc or onto a folder fails
@@ -67,11 +67,11 @@ RunResult run_on_threads(const SceneDef& scene, const RunOptions& options, int t
     if (!options.report.empty()) write_file_atomically(options.report, report.dump());
   };
 
-  // A frame's files (the particle files, then each family exporter's: each cloth's OBJ) go to
-  // disk while the next frame is simulated, in that order; before a frame counts, the previous
-  // frame's files are on disk. So a failed write stops the run one frame later at most, before
-  // anything of the next frame is recorded or written, and every frame before the failed one is
-  // complete.
+  // A frame's files (the particle files, then each family exporter's: each cloth's OBJ, the
+  // bodies' file) go to disk while the next frame is simulated, in that order; before a frame
+  // counts, the previous frame's files are on disk. So a failed write stops the run one frame
+  // later at most, before anything of the next frame is recorded or written, and every frame
+  // before the failed one is complete.
   std::size_t files_per_frame = particle_files.files_per_frame();
   for (const auto& e : exporters) files_per_frame += e->files(1).size();
   BackgroundWriter frame_files(files_per_frame);
@@ -93,8 +93,9 @@ RunResult run_on_threads(const SceneDef& scene, const RunOptions& options, int t
       if (!options.out_dir.empty()) {
         for (FrameExporter::EncodedFile& file : particle_files.encode(sim.particles(), f))
           submit(options.out_dir / file.name, std::move(file.bytes));
+        const std::vector<BodyPose> bodies = sim.body_poses();
         for (const auto& e : exporters)
-          for (FrameExporter::EncodedFile& file : e->encode_frame({sim.particles(), scene, f, sim.time()}))
+          for (FrameExporter::EncodedFile& file : e->encode_frame({sim.particles(), scene, f, sim.time(), bodies}))
             submit(options.out_dir / file.name, std::move(file.bytes));
       }
       result.frames = f;

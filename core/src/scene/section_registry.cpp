@@ -9,6 +9,7 @@
 #include "families/collider/collider_reader.hpp"
 #include "families/distance/distance_reader.hpp"
 #include "families/fluid/fluid_reader.hpp"
+#include "families/rigid/rigid_reader.hpp"
 #include "families/shape/shape_reader.hpp"
 #include "output_name.hpp"
 
@@ -25,6 +26,8 @@ const std::vector<SceneSection>& scene_sections() {
       colliders_section(),
       cloths_section(),
       shapes_section(),
+      rigid_bodies_section(),
+      joints_section(),
   };
   return sections;
 }

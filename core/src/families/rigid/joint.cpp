@@ -1,0 +1,116 @@
+// The joints' XPBD solve (the constraints are in joint.hpp, the corrections in
+// body_correction.hpp).
+#include "joint.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "body_correction.hpp"
+
+namespace seiche::rigid {
+
+namespace {
+
+double hinge_angle_of(const Joint& j, const RigidBody& a, const RigidBody& b) {
+  const Vec3d axis = rotate(a.q, j.axis_a);
+  const Vec3d from = rotate(a.q, j.normal_a), to = rotate(b.q, j.normal_b);
+  return std::atan2(dot(cross(from, to), axis), dot(from, to));
+}
+
+// The rotation vector that turns unit u onto unit v (zero when they are parallel).
+Vec3d rotation_between(Vec3d u, Vec3d v) {
+  const Vec3d c = cross(u, v);
+  const double s = length(c);
+  if (!(s > 0.0)) return {};
+  return (std::atan2(s, dot(u, v)) / s) * c;
+}
+
+// The positional error the joint corrects: P_b - P_a, less what its type allows.
+Vec3d positional_error(const Joint& j, const RigidBody& a, const RigidBody& b, Vec3d r_a, Vec3d r_b) {
+  const Vec3d d = (b.x + r_b) - (a.x + r_a);
+  if (j.type == JointType::Distance) {
+    const double l = length(d);
+    return (l - std::clamp(l, j.min_distance, j.max_distance)) * normalized_or_zero(d);
+  }
+  if (j.type == JointType::Slider) {
+    const Vec3d axis = rotate(a.q, j.axis_a);
+    const double along = dot(d, axis);
+    return d - (j.limited ? std::clamp(along, j.lower, j.upper) : along) * axis;
+  }
+  return d;
+}
+
+// The fixed joint's (and slider's) angular error: the rotation vector of q_b (q_a q_rest)^-1.
+Vec3d fixed_rotation_error(const Joint& j, const RigidBody& a, const RigidBody& b) {
+  return rotation_vector(b.q * conjugate(a.q * j.rest_rotation));
+}
+
+}  // namespace
+
+double wrap_angle(double angle) {
+  constexpr double pi = std::numbers::pi;
+  return angle - 2.0 * pi * std::floor((angle + pi) / (2.0 * pi));
+}
+
+double JointSolver::hinge_angle(const Joint& j, std::span<const RigidBody> bodies) const {
+  if (j.type != JointType::Hinge) return 0.0;
+  const RigidBody& a = j.body_a < 0 ? world_ : bodies[std::size_t(j.body_a)];
+  const RigidBody& b = j.body_b < 0 ? world_ : bodies[std::size_t(j.body_b)];
+  return hinge_angle_of(j, a, b);
+}
+
+void JointSolver::begin_substep(std::span<const RigidBody> bodies) {
+  for (Joint& j : joints_)
+    if (j.motor == MotorMode::Velocity) j.motor_start_angle = hinge_angle(j, bodies);
+}
+
+void JointSolver::reset_multipliers() {
+  for (Joint& j : joints_) j.lambda_position = j.lambda_align = j.lambda_limit = j.lambda_motor = 0.0;
+}
+
+void JointSolver::solve(std::span<RigidBody> bodies, double h) {
+  const double inverse_h2 = 1.0 / (h * h);
+  for (Joint& j : joints_) {
+    RigidBody& a = j.body_a < 0 ? world_ : bodies[std::size_t(j.body_a)];
+    RigidBody& b = j.body_b < 0 ? world_ : bodies[std::size_t(j.body_b)];
+    const double alpha = j.compliance * inverse_h2;
+    if (j.type == JointType::Hinge) {
+      correct_rotation(a, b, rotation_between(rotate(a.q, j.axis_a), rotate(b.q, j.axis_b)), alpha, j.lambda_align);
+      const Vec3d axis = rotate(a.q, j.axis_a);
+      if (j.limited) {
+        const double phi = hinge_angle_of(j, a, b);
+        const double over = phi - std::clamp(phi, j.lower, j.upper);
+        if (over != 0.0) correct_rotation(a, b, over * axis, alpha, j.lambda_limit);
+      }
+    } else if (j.type == JointType::Fixed || j.type == JointType::Slider) {
+      correct_rotation(a, b, fixed_rotation_error(j, a, b), alpha, j.lambda_align);
+    }
+    const Vec3d r_a = rotate(a.q, j.anchor_a), r_b = rotate(b.q, j.anchor_b);
+    correct_position(a, b, r_a, r_b, positional_error(j, a, b, r_a, r_b), alpha, j.lambda_position);
+    if (j.motor != MotorMode::None) {  // last: the drive is what the iteration ends on
+      const double target = j.motor == MotorMode::Angle ? j.target : j.motor_start_angle + j.target * h;
+      const double off = wrap_angle(hinge_angle_of(j, a, b) - target);
+      correct_rotation(a, b, off * rotate(a.q, j.axis_a), j.motor_compliance * inverse_h2, j.lambda_motor);
+    }
+  }
+}
+
+JointSolver::Error JointSolver::error(const Joint& j, std::span<const RigidBody> bodies) const {
+  const RigidBody& a = j.body_a < 0 ? world_ : bodies[std::size_t(j.body_a)];
+  const RigidBody& b = j.body_b < 0 ? world_ : bodies[std::size_t(j.body_b)];
+  Error e;
+  e.distance = length(positional_error(j, a, b, rotate(a.q, j.anchor_a), rotate(b.q, j.anchor_b)));
+  if (j.type == JointType::Hinge) {
+    e.angle = length(rotation_between(rotate(a.q, j.axis_a), rotate(b.q, j.axis_b)));
+    if (j.limited) {
+      const double phi = hinge_angle_of(j, a, b);
+      e.angle += std::fabs(phi - std::clamp(phi, j.lower, j.upper));
+    }
+  } else if (j.type == JointType::Fixed || j.type == JointType::Slider) {
+    e.angle = length(fixed_rotation_error(j, a, b));
+  }
+  return e;
+}
+
+}  // namespace seiche::rigid

@@ -1,0 +1,95 @@
+// Joints between rigid bodies, XPBD with compliance from connector points (Müller et al. 2020,
+// section 3.3; the seed's connector points P = x + R(q) r): every iteration each joint moves its
+// two bodies through their generalized inverse masses (body_correction.hpp).
+//   ball    P_b - P_a = 0                                  (3 translational degrees locked)
+//   hinge   the axes a_a = R_a u_a and a_b = R_b u_b aligned: e = theta (a_a x a_b) / |a_a x a_b|,
+//           theta = atan2(|a_a x a_b|, a_a . a_b) (body b turned by e too far); then P_b = P_a.
+//           Its angle phi about a_a: the signed angle from b_a = R_a s_a to b_b = R_b s_b
+//           (s perpendicular to u, equal in the world at the start, so phi starts at 0):
+//           phi = atan2((b_a x b_b) . a_a, b_a . b_b). A limit [lo, hi] corrects e = (phi -
+//           clamp(phi, lo, hi)) a_a when phi is outside it; a motor drives phi to a target angle,
+//           or to phi_0 + omega_target h each substep (phi_0 its angle when the substep began),
+//           e = wrap(phi - target) a_a with the motor's own compliance.
+//   fixed   q_b = q_a q_rest (q_rest = q_a^-1 q_b at the start): e = log(q_b (q_a q_rest)^-1);
+//           then P_b = P_a.
+//   distance  |P_b - P_a| in [min, max] (P_a and P_b each body's own point): when outside, the
+//           positional error d = (|d| - clamp(|d|, min, max)) d / |d|, d = P_b - P_a.
+//   slider  the orientation as for fixed; then P_b - P_a = s a_a with s in [lower, upper] (or
+//           any s without limits): the positional error d - clamp(d . a_a, lower, upper) a_a.
+// A body index of -1 is the world (a fixed body at the origin, unrotated), whose "body frame" is
+// the world frame.
+// The joints are solved serially in scene order (Gauss-Seidel), each correction seeing the
+// last: deterministic at any thread count. A joint's parts: its angular constraints first (the
+// paper's order: alignment, limits), then the anchor, then a motor's drive, which is what each
+// iteration ends on, so that the joint turns at the motor's rate while the anchor converges.
+#pragma once
+
+#include <span>
+#include <vector>
+
+#include "rigid_body.hpp"
+
+namespace seiche::rigid {
+
+enum class JointType { Ball, Hinge, Fixed, Distance, Slider };
+enum class MotorMode { None, Angle, Velocity };
+
+struct Joint {
+  JointType type = JointType::Ball;
+  int body_a = -1, body_b = -1;  ///< indices into the bodies; -1: the world
+  Vec3d anchor_a, anchor_b;      ///< the connector point in each body's frame
+  Vec3d axis_a, axis_b;          ///< hinge, slider: the unit axis u in each body's frame
+  Vec3d normal_a, normal_b;      ///< hinge: a unit s perpendicular to u, in each body's frame
+  Quatd rest_rotation;           ///< fixed, slider: q_a^-1 q_b at the start
+  double compliance = 0.0;       ///< m/N and rad/(N m)
+  bool limited = false;             ///< hinge: angle limits; slider: travel limits
+  double lower = 0.0, upper = 0.0;  ///< hinge: rad; slider: m along the axis
+  double min_distance = 0.0, max_distance = 0.0;  ///< distance (m)
+  MotorMode motor = MotorMode::None;
+  double target = 0.0;              ///< rad (Angle) or rad/s (Velocity)
+  double motor_compliance = 0.0;    ///< rad/(N m)
+  double length = 1.0;  ///< m: the scale of its drift (the reach of its bodies from the anchor)
+
+  // Per substep.
+  double motor_start_angle = 0.0;   ///< phi when the substep began (Velocity)
+  double lambda_position = 0.0, lambda_align = 0.0, lambda_limit = 0.0, lambda_motor = 0.0;
+};
+
+/// The joints' solve over `bodies` (the world is the fixed body `world`).
+class JointSolver {
+ public:
+  JointSolver() = default;
+  explicit JointSolver(std::vector<Joint> joints) : joints_(std::move(joints)) {}
+
+  const std::vector<Joint>& joints() const { return joints_; }
+  bool empty() const { return joints_.empty(); }
+
+  /// Before the bodies are predicted: each velocity motor's phi_0.
+  void begin_substep(std::span<const RigidBody> bodies);
+  /// Before the first iteration: every multiplier to 0.
+  void reset_multipliers();
+  /// One iteration: every joint once, in order.
+  void solve(std::span<RigidBody> bodies, double h);
+
+  /// A joint's errors on the bodies as they are: the length of its positional error (m: |P_b -
+  /// P_a|, for a distance joint how far outside its range, for a slider off its axis or range)
+  /// and its angular error (rad: the hinge's axis misalignment plus how far phi is outside its
+  /// limits; the fixed joint's and slider's rotation off its rest; 0 for ball and distance).
+  struct Error {
+    double distance = 0.0;
+    double angle = 0.0;
+  };
+  Error error(const Joint& j, std::span<const RigidBody> bodies) const;
+
+  /// The hinge angle phi of joint j (0 for the other types).
+  double hinge_angle(const Joint& j, std::span<const RigidBody> bodies) const;
+
+ private:
+  std::vector<Joint> joints_;
+  RigidBody world_;  // fixed, at the origin, unrotated
+};
+
+/// `angle` wrapped into [-pi, pi].
+double wrap_angle(double angle);
+
+}  // namespace seiche::rigid

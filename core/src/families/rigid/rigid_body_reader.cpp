@@ -1,0 +1,124 @@
+// The "rigid_bodies" section: the key table of a rigid body, its reader, and the rules across
+// keys and sections (the sizes its shape uses and no others, a name no other body has, a centre
+// inside the domain, an orientation axis that is not zero).
+#include <fmt/format.h>
+
+#include <cmath>
+
+#include "body_shape.hpp"
+#include "rigid_reader.hpp"
+#include "scene/output_name.hpp"
+#include "scene/shared_keys.hpp"
+
+namespace seiche::detail {
+
+namespace {
+
+// Densest solid (osmium, 22.6 t/m^3) with room to spare, as for shapes.
+constexpr double kMaxDensity = 1e5;
+// The lightest body: below, its inverse mass and inertia leave the range a joint solve can mix
+// with ordinary bodies.
+constexpr double kMinBodyMass = 1e-9;
+
+const KeyTable<RigidBodyDef>& rigid_body_keys() {
+  using K = Key<RigidBodyDef>;
+  static const KeyTable<RigidBodyDef> keys{
+      K("name", &RigidBodyDef::name)
+          .required()
+          .valid_note("1 to 64 ASCII letters, digits, `_`, `-`, `.`; not starting with `.` or `-`; not `world`; "
+                      "unique ignoring case")
+          .doc("names the body for joints and in `bodies.%04d.jsonl`"),
+      K("shape", &RigidBodyDef::shape)
+          .choices({"box", "sphere", "capsule"})
+          .doc("a box (edges along the body's x, y, z), a sphere, or a capsule (axis along the body's y)"),
+      K("size", &RigidBodyDef::size)
+          .unit("m")
+          .valid_note("every component > 0; box only")
+          .doc("box: its edge lengths along the body's x, y, z"),
+      K("radius", &RigidBodyDef::radius, Range::above(0)).unit("m").doc("sphere and capsule only: the radius"),
+      K("length", &RigidBodyDef::length, Range::above(0))
+          .unit("m")
+          .doc("capsule only: the length of its cylinder (the caps add a radius at each end)"),
+      K("density", &RigidBodyDef::density, Range::left_open(0, kMaxDensity))
+          .unit("kg/m³")
+          .doc("mass and inertia tensor follow from it, the shape and the size (closed forms)"),
+      K("position", &RigidBodyDef::position)
+          .required()
+          .unit("m")
+          .valid_note("inside the domain")
+          .doc("the centre of mass at the start"),
+      K("axis", &RigidBodyDef::axis)
+          .valid_note("not zero when `angle` is not 0")
+          .doc("orientation at the start: the body is turned by `angle` about this axis (world frame) from its rest "
+               "pose"),
+      K("angle", &RigidBodyDef::angle).unit("degrees").doc("orientation at the start: the angle about `axis`"),
+      K("velocity", &RigidBodyDef::velocity).unit("m/s").doc("initial velocity of the centre of mass"),
+      K("angular_velocity", &RigidBodyDef::angular_velocity)
+          .unit("rad/s")
+          .doc("initial angular velocity, world frame"),
+      K("fixed", &RigidBodyDef::fixed).doc("the body never moves (infinite mass): an anchor for joints"),
+  };
+  return keys;
+}
+
+// A size key the body's shape does not use is an error, not silently ignored.
+void reject_unused_size_keys(JsonReader& r, const RigidBodyDef& b) {
+  const BodyShape shape = body_shape_of(b.shape);
+  const bool uses_size = shape == BodyShape::Box;
+  const bool uses_radius = shape != BodyShape::Box;
+  const bool uses_length = shape == BodyShape::Capsule;
+  const auto reject = [&](const char* key, bool used) {
+    if (!used && r.has(key)) r.fail_at(key, fmt::format("a {} has no \"{}\"", b.shape, key));
+  };
+  reject("size", uses_size);
+  reject("radius", uses_radius);
+  reject("length", uses_length);
+}
+
+void read_rigid_body(JsonReader r, SceneDef& scene) {
+  RigidBodyDef b;
+  read_keys(r, rigid_body_keys(), b);
+  reject_unused_size_keys(r, b);
+  if (const std::string problem = output_name_problem(b.name); !problem.empty()) r.fail_at("name", problem);
+  if (output_name_key(b.name) == "world")
+    r.fail_at("name", "\"world\" is what a joint's body_a names the world by; give the body another name");
+  if (body_shape_of(b.shape) == BodyShape::Box)
+    for (int a = 0; a < 3; ++a)
+      if (!(b.size[a] > 0.0f))
+        r.fail_at("size", fmt::format("{} is not a size: every edge must be longer than 0 m ({} is {})",
+                                      format_vec(b.size), kAxis[a], b.size[a]));
+  const Vec3& axis = b.axis;
+  if (b.angle != 0.0f && !(std::hypot(double(axis[0]), double(axis[1]), double(axis[2])) > 0.0))
+    r.fail_at("axis", fmt::format("is zero, so the {} degree turn has no axis", b.angle));
+  r.finish();
+  scene.rigid_bodies.push_back(b);
+}
+
+void check_rigid_bodies(SceneDef& scene, const std::string& file) {
+  for (std::size_t k = 0; k < scene.rigid_bodies.size(); ++k) {
+    const RigidBodyDef& b = scene.rigid_bodies[k];
+    const std::string path = element_path("rigid_bodies", k);
+    for (std::size_t j = 0; j < k; ++j)
+      if (output_name_key(scene.rigid_bodies[j].name) == output_name_key(b.name))
+        fail(file, path + ".name",
+             fmt::format("\"{}\" is also the name of rigid_bodies[{}] (names are compared ignoring case)", b.name, j));
+    const MassProperties m = mass_properties(body_shape_def(b));
+    if (!(m.mass >= kMinBodyMass))
+      fail(file, path + ".density",
+           fmt::format("gives a body of {:.3g} kg (density * volume); the lightest allowed is {:g} kg", m.mass,
+                       kMinBodyMass));
+    if (!inside(b.position, scene.domain))
+      fail(file, path + ".position",
+           fmt::format("{} lies outside the domain {}", format_vec(b.position), format_domain(scene.domain)));
+  }
+}
+
+}  // namespace
+
+SceneSection rigid_bodies_section() {
+  return {"rigid_bodies", true, "rigid bodies (box, sphere, capsule) with their own position and orientation",
+          read_rigid_body, check_rigid_bodies,
+          [] { return std::vector<KeyTableDoc>{{"rigid_bodies", key_docs(rigid_body_keys())}}; }};
+}
+
+}  // namespace seiche::detail

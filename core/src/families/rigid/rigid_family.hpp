@@ -1,0 +1,57 @@
+// Rigid bodies and the joints between them (scene sections "rigid_bodies" and "joints"): bodies
+// with their own state in double precision (rigid_body.hpp), not particles, integrated per
+// substep as in Müller et al. 2020, and joints solved as an extra pass of the iterations
+// (joint.hpp), their corrections through the bodies' generalized inverse masses
+// (body_correction.hpp).
+//
+// What the family holds and where:
+//   bodies   position, orientation, velocity, angular velocity (state: checkpoint chunk
+//            "rigid.bodies"); mass and inertia (rebuilt from the scene on a resume)
+//   joints   their connector points and axes in the bodies' frames (from the scene); their
+//            multipliers and motor start angles live within a substep, so are not state
+// Passes: "body predict" (Predict, kBodyPredict) and "body update" (Update, kBodyUpdate);
+// with joints, a reset (BeginSubstep, kJointReset) and "joints" every iteration (kJoints).
+// Error rows: "joint_drift" (each joint's positional error, JointSolver::error, relative to its
+// length), "joint_angle_error" (radians; hinge, fixed and slider joints), "body_energy" (|E - E_0| / E_0, E the bodies' kinetic plus
+// gravitational energy, zero at the domain's lowest corner as for the particles).
+#pragma once
+
+#include <vector>
+
+#include "joint.hpp"
+#include "loop/family.hpp"
+#include "rigid_body.hpp"
+#include "seiche/frame_exporter.hpp"
+#include "seiche/scene.hpp"
+
+namespace seiche {
+
+class RigidFamily final : public Family {
+ public:
+  explicit RigidFamily(const SceneDef& scene);
+
+  void add_passes(std::vector<Pass>& passes) override;
+  void measure(FrameMetrics& m) override;
+  void save_state(CheckpointChunks& chunks) const override;
+  void restore_state(const CheckpointChunks& chunks) override;
+
+  const std::vector<rigid::RigidBody>& bodies() const { return bodies_; }
+  const rigid::JointSolver& joints() const { return joints_; }
+  /// Every body's position, orientation and velocities now, in scene order.
+  std::vector<BodyPose> poses() const;
+  /// The bodies' kinetic plus gravitational energy (J), zero at the domain's lowest corner.
+  double energy() const;
+
+ private:
+  void predict();
+  void update();
+
+  std::vector<rigid::RigidBody> bodies_;
+  rigid::JointSolver joints_;
+  rigid::Vec3d gravity_;
+  rigid::Vec3d lowest_corner_;
+  double h_;             // the substep (s), in double: frame_dt / substeps
+  double start_energy_;  // E_0, for the energy row
+};
+
+}  // namespace seiche

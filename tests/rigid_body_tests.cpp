@@ -1,0 +1,473 @@
+// Rigid bodies as a family (core/src/families/rigid/): the shapes' closed-form inertia against
+// a numerical integral; a free-falling spinning box keeps its energy and its angular momentum;
+// torque-free motion of an asymmetric box (precession, and the flip of a spin about the
+// intermediate axis) from the gyroscopic term; the bodies' file per frame. Joints: a physical
+// pendulum's period, a double pendulum's energy, a hinge's motor and limits; the shipped
+// pendulums at any thread count and across a checkpoint.
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include "families/rigid/body_shape.hpp"
+#include "families/rigid/rigid_body.hpp"
+#include "families/rigid/rigid_family.hpp"
+#include "seiche/body_exporter.hpp"
+#include "seiche/checkpoint.hpp"
+#include "seiche/output_files.hpp"
+#include "seiche/scene_loader.hpp"
+#include "seiche/simulation.hpp"
+#include "seiche/thread_count.hpp"
+
+using namespace seiche;
+using namespace seiche::rigid;
+namespace fs = std::filesystem;
+
+namespace {
+
+// The body's principal moments by a midpoint sum over a fine grid of its bounding box, with the
+// shape's inside test: the check of the closed forms.
+Vec3d numerical_inertia(const ShapeDims& d, double half_x, double half_y, double half_z, bool (*inside)(const ShapeDims&, Vec3d),
+                        double& mass) {
+  constexpr int n = 160;
+  const double dx = 2 * half_x / n, dy = 2 * half_y / n, dz = 2 * half_z / n, dv = dx * dy * dz;
+  Vec3d inertia;
+  mass = 0.0;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j)
+      for (int k = 0; k < n; ++k) {
+        const Vec3d p{-half_x + (i + 0.5) * dx, -half_y + (j + 0.5) * dy, -half_z + (k + 0.5) * dz};
+        if (!inside(d, p)) continue;
+        const double m = d.density * dv;
+        mass += m;
+        inertia += m * Vec3d{p.y * p.y + p.z * p.z, p.x * p.x + p.z * p.z, p.x * p.x + p.y * p.y};
+      }
+  return inertia;
+}
+
+bool inside_sphere(const ShapeDims& d, Vec3d p) { return dot(p, p) <= d.radius * d.radius; }
+bool inside_capsule(const ShapeDims& d, Vec3d p) {
+  const double along = std::max(std::fabs(p.y) - 0.5 * d.length, 0.0);
+  return p.x * p.x + p.z * p.z + along * along <= d.radius * d.radius;
+}
+bool inside_box(const ShapeDims&, Vec3d) { return true; }
+
+void expect_near_relative(Vec3d a, Vec3d b, double tolerance) {
+  EXPECT_NEAR(a.x, b.x, tolerance * std::fabs(b.x));
+  EXPECT_NEAR(a.y, b.y, tolerance * std::fabs(b.y));
+  EXPECT_NEAR(a.z, b.z, tolerance * std::fabs(b.z));
+}
+
+// A free body, asymmetric box 0.4 x 0.2 x 0.1 m of density 500 (4 kg), thrown up and spinning.
+constexpr const char* kSpinningBox = R"({
+  "domain": {"min": [-10, -50, -10], "max": [10, 10, 10]},
+  "rigid_bodies": [{"name": "box", "size": [0.4, 0.2, 0.1], "density": 500, "position": [0, 0, 0],
+                    "velocity": [1, 2, 0], "angular_velocity": [0.3, 3, 0.2], "axis": [1, 1, 0], "angle": 40}]
+})";
+
+double rotational_energy(const RigidBody& b) {
+  const Vec3d w = rotate_back(b.q, b.omega);
+  return 0.5 * dot(w, scale(b.inertia, w));
+}
+
+}  // namespace
+
+TEST(RigidBody, ClosedFormInertiaMatchesTheIntegral) {
+  double mass = 0.0;
+  const ShapeDims box{BodyShape::Box, {0.4, 0.2, 0.1}, 0.0, 0.0, 700.0};
+  const Vec3d box_numeric = numerical_inertia(box, 0.2, 0.1, 0.05, inside_box, mass);
+  EXPECT_NEAR(mass_properties(box).mass, mass, 1e-9 * mass);
+  expect_near_relative(mass_properties(box).inertia, box_numeric, 1e-4);
+
+  const ShapeDims sphere{BodyShape::Sphere, {}, 0.3, 0.0, 900.0};
+  const Vec3d sphere_numeric = numerical_inertia(sphere, 0.3, 0.3, 0.3, inside_sphere, mass);
+  EXPECT_NEAR(mass_properties(sphere).mass, mass, 2e-3 * mass);
+  expect_near_relative(mass_properties(sphere).inertia, sphere_numeric, 4e-3);
+
+  const ShapeDims capsule{BodyShape::Capsule, {}, 0.1, 0.5, 1100.0};
+  const Vec3d capsule_numeric = numerical_inertia(capsule, 0.1, 0.35, 0.1, inside_capsule, mass);
+  EXPECT_NEAR(mass_properties(capsule).mass, mass, 2e-3 * mass);
+  expect_near_relative(mass_properties(capsule).inertia, capsule_numeric, 4e-3);
+  EXPECT_DOUBLE_EQ(mass_properties(capsule).extent, 0.35);
+}
+
+// Over 2 s (960 substeps of 1/480 s): the centre of mass follows the parabola (to the
+// symplectic Euler's known offset g h t / 2), the world angular momentum and the rotational
+// energy stay to rounding (rigid_body.hpp), and the body really tumbles (omega turns in the
+// world about the fixed L: torque-free precession).
+TEST(RigidBody, FreeFallingSpinningBoxKeepsEnergyAndAngularMomentum) {
+  const SceneDef scene = load_scene_text(kSpinningBox, "spin.json");
+  Simulation sim(scene);
+  const RigidFamily bodies(scene);  // the same body, stepped by hand below
+  RigidBody b = bodies.bodies()[0];
+  const double h = 1.0 / 480.0;
+  const Vec3d g{0.0, -9.81, 0.0};
+  const Vec3d x0 = b.x, v0 = b.v;
+  const Vec3d momentum0 = angular_momentum(b);
+  const double rotational0 = rotational_energy(b);
+  const Vec3d omega0 = b.omega;
+  double smallest_cos = 1.0;
+  for (int step = 1; step <= 960; ++step) {
+    predict_body(b, {g.x, g.y, g.z}, h);
+    update_body_velocity(b, h);
+    const Vec3d momentum = angular_momentum(b);
+    ASSERT_NEAR(length(momentum - momentum0), 0.0, 1e-11 * length(momentum0)) << "substep " << step;
+    ASSERT_NEAR(rotational_energy(b), rotational0, 1e-11 * rotational0) << "substep " << step;
+    smallest_cos = std::min(smallest_cos, dot(b.omega, omega0) / (length(b.omega) * length(omega0)));
+  }
+  const double t = 2.0;
+  const Vec3d expected = x0 + t * v0 + (0.5 * t * t) * g + (0.5 * h * t) * g;
+  EXPECT_NEAR(length(b.x - expected), 0.0, 1e-9);
+  EXPECT_NEAR(length(b.v - (v0 + t * g)), 0.0, 1e-10);
+  EXPECT_LT(smallest_cos, 0.9) << "omega should precess about L";
+  // The whole simulation over the same 2 s: the energy row is the translational offset only,
+  // m g^2 h t / 2 over E_0.
+  double worst = 0.0;
+  for (int f = 0; f < 120; ++f) {
+    const FrameMetrics m = sim.step_frame();
+    ASSERT_EQ(m.non_finite, 0u);
+    ASSERT_NE(m.error("body_energy"), nullptr);
+    worst = std::max(worst, m.error("body_energy")->max);
+  }
+  const double mass = 4.0;
+  EXPECT_LT(worst, 1.01 * mass * 9.81 * 9.81 * h * t / 2 / bodies.energy());
+  EXPECT_EQ(sim.pipeline(), (std::vector<std::string>{"predict", "body predict", "collisions", "update", "body update"}));
+}
+
+// Torque-free: a spin about the intermediate principal axis (y of the 0.4 x 0.2 x 0.1 box:
+// I_x < I_y < I_z) is unstable and the body turns over (the Dzhanibekov effect), while L stays
+// fixed in the world; a spin about the largest axis only wobbles. Without the gyroscopic term
+// the spin axis would stay put in both.
+TEST(RigidBody, SpinAboutTheIntermediateAxisFlipsWithLConstant) {
+  const MassProperties m = mass_properties({BodyShape::Box, {0.4, 0.2, 0.1}, 0.0, 0.0, 500.0});
+  ASSERT_LT(m.inertia.x, m.inertia.y);
+  ASSERT_LT(m.inertia.y, m.inertia.z);
+  const double h = 1.0 / 480.0;
+  const auto run = [&](Vec3d omega, double& lowest_alignment) {
+    RigidBody b = make_body({}, {}, {}, omega, m.mass, m.inertia, false);
+    const Vec3d momentum0 = angular_momentum(b);
+    const double energy0 = rotational_energy(b);
+    const Vec3d axis0 = rotate(b.q, normalized_or_zero(omega));
+    lowest_alignment = 1.0;
+    for (int step = 0; step < 480 * 6; ++step) {
+      predict_body(b, {}, h);
+      update_body_velocity(b, h);
+      lowest_alignment = std::min(lowest_alignment, dot(rotate(b.q, normalized_or_zero(omega)), axis0));
+    }
+    EXPECT_NEAR(length(angular_momentum(b) - momentum0), 0.0, 1e-11 * length(momentum0));
+    EXPECT_NEAR(rotational_energy(b), energy0, 1e-11 * energy0);
+  };
+  double flip = 1.0, wobble = 1.0;
+  run({0.01, 4.0, 0.0}, flip);    // about the intermediate axis y, nudged (not along (1, 0, 1): the
+                                  // stable direction of the linearized motion)
+  run({0.0, 0.08, 4.0}, wobble);  // about the largest axis z, nudged
+  EXPECT_LT(flip, -0.95) << "the intermediate axis should turn over";
+  EXPECT_GT(wobble, 0.99) << "a spin about the largest axis is stable";
+}
+
+TEST(RigidBody, BodiesFileHasOneLinePerBodyWithItsTransform) {
+  const SceneDef scene = load_scene_text(kSpinningBox, "spin.json");
+  Simulation sim(scene);
+  sim.step_frame();
+  const std::vector<BodyPose> poses = sim.body_poses();
+  ASSERT_EQ(poses.size(), 1u);
+  const std::string text = encode_bodies_jsonl(scene, poses);
+  EXPECT_EQ(text.rfind("{\"name\": \"box\", \"position\": [", 0), 0u) << text;
+  EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 1);
+  EXPECT_NE(text.find(fmt::format("{}", poses[0].orientation[0])), std::string::npos);
+  // A scene without bodies has none, and no bodies file.
+  const SceneDef empty = load_scene_text(R"({"particles": [{"x": [0.5, 0.5, 0.5]}]})", "p.json");
+  EXPECT_TRUE(Simulation(empty).body_poses().empty());
+  EXPECT_EQ(make_body_exporter(empty), nullptr);
+}
+
+// ---- Joints ------------------------------------------------------------------------------------
+
+namespace {
+
+// A box 0.1 x 0.4 x 0.1 m hanging from a ball joint at its top edge centre (d = 0.2 m), let go
+// at `degrees` about z.
+std::string physical_pendulum(double degrees) {
+  const double a = degrees * std::numbers::pi / 180.0, d = 0.2;
+  return fmt::format(R"({{
+    "domain": {{"min": [-2, -2, -2], "max": [2, 2, 2]}},
+    "rigid_bodies": [{{"name": "bob", "size": [0.1, 0.4, 0.1], "density": 800,
+                      "position": [{}, {}, 0], "axis": [0, 0, 1], "angle": {}}}],
+    "joints": [{{"body_b": "bob", "anchor": [0, 0, 0]}}]
+  }})",
+                     d * std::sin(a), -d * std::cos(a), degrees);
+}
+
+// Times at which f changes sign from negative to positive, by linear interpolation.
+std::vector<double> upward_crossings(const std::vector<double>& t, const std::vector<double>& f) {
+  std::vector<double> c;
+  for (std::size_t k = 1; k < f.size(); ++k)
+    if (f[k - 1] < 0.0 && f[k] >= 0.0) c.push_back(t[k - 1] + (t[k] - t[k - 1]) * (-f[k - 1]) / (f[k] - f[k - 1]));
+  return c;
+}
+
+}  // namespace
+
+// Small angle (2 degrees): the period is 2 pi sqrt(I / (m g d)), I about the pivot = I_cm + m d^2,
+// measured by upward zero crossings of the bob's x over 5 periods, at the default settings.
+TEST(Joints, PhysicalPendulumPeriodMatchesTheSmallAngleFormula) {
+  const SceneDef scene = load_scene_text(physical_pendulum(2.0), "pendulum.json");
+  Simulation sim(scene);
+  const MassProperties m = mass_properties(body_shape_def(scene.rigid_bodies[0]));
+  const double d = 0.2, g = 9.81;
+  const double expected = 2.0 * std::numbers::pi * std::sqrt((m.inertia.z + m.mass * d * d) / (m.mass * g * d));
+  std::vector<double> t, x;
+  double worst_drift = 0.0;
+  while (sim.time() < 6.0 * expected) {
+    const FrameMetrics f = sim.step_frame();
+    worst_drift = std::max(worst_drift, f.error("joint_drift")->max);
+    t.push_back(sim.time());
+    x.push_back(sim.body_poses()[0].position[0]);
+  }
+  const std::vector<double> c = upward_crossings(t, x);
+  ASSERT_GE(c.size(), 5u);
+  const double period = (c.back() - c.front()) / double(c.size() - 1);
+  EXPECT_NEAR(period, expected, 0.005 * expected) << "measured " << period << " s, expected " << expected << " s";
+  EXPECT_LT(worst_drift, 1e-4);
+}
+
+// A double pendulum of two 0.5 m boxes on ball joints, let go from horizontal, chaotic: over
+// 10 s its energy (gravitational from the domain's floor, 3 m below the pivot, as the report's
+// row) stays within 1 % at 512 substeps of one iteration (0.50 %). Not at the defaults: XPBD's
+// projection and velocity update dissipate energy in proportion to the substep (a particle
+// pendulum loses 51 % of m g L over 10 s at 8 substeps, 5 % at 128); the defaults (8 x 2,
+// shared with fluid and cloth) lose 9.8 % here, 64 x 1 3.2 %, 128 x 1 1.7 %, 256 x 1 0.98 %
+// (docs/design.md, "Rigid bodies and joints"). 512 leaves room for a libm that rounds a sine
+// differently: the motion is chaotic, so the trajectory, and the largest error, would change.
+// A scene of bodies costs microseconds per substep; scenes/pendulums.json runs at 512 too.
+TEST(Joints, DoublePendulumKeepsItsEnergyOverTenSeconds) {
+  const SceneDef scene = load_scene_text(R"({
+    "solver": {"substeps": 512, "iterations": 1},
+    "domain": {"min": [-3, -3, -3], "max": [3, 3, 3]},
+    "rigid_bodies": [
+      {"name": "upper", "size": [0.5, 0.05, 0.05], "density": 1000, "position": [0.25, 0, 0]},
+      {"name": "lower", "size": [0.5, 0.05, 0.05], "density": 1000, "position": [0.75, 0, 0]}],
+    "joints": [{"body_b": "upper", "anchor": [0, 0, 0]},
+               {"body_a": "upper", "body_b": "lower", "anchor": [0.5, 0, 0]}]
+  })", "double.json");
+  Simulation sim(scene);
+  double worst = 0.0, worst_drift = 0.0, lowest_x = 1.0;
+  while (sim.time() < 10.0) {
+    const FrameMetrics f = sim.step_frame();
+    ASSERT_EQ(f.non_finite, 0u);
+    worst = std::max(worst, f.error("body_energy")->max);
+    worst_drift = std::max(worst_drift, f.error("joint_drift")->max);
+    lowest_x = std::min(lowest_x, sim.body_poses()[1].position[0]);
+  }
+  EXPECT_LT(worst, 0.01);
+  EXPECT_LT(worst_drift, 0.005);
+  EXPECT_LT(lowest_x, 0.0) << "the lower link should swing past the pivot";
+}
+
+// A wheel on a hinge to the world driven at 90 degrees/s: its angular velocity about the axis
+// reaches the target within 1 % (after a frame), and stays; a target angle is reached too.
+TEST(Joints, HingeMotorReachesItsTargetVelocityAndAngle) {
+  const auto scene_with = [](const char* motor) {
+    return load_scene_text(fmt::format(R"({{
+      "domain": {{"min": [-2, -2, -2], "max": [2, 2, 2]}},
+      "rigid_bodies": [{{"name": "arm", "size": [0.6, 0.05, 0.05], "density": 700, "position": [0.3, 0, 0]}}],
+      "joints": [{{"type": "hinge", "body_b": "arm", "anchor": [0, 0, 0], "axis": [0, 0, 1], {}}}]
+    }})", motor), "motor.json");
+  };
+  {
+    Simulation sim(scene_with(R"("target_velocity": 90)"));
+    const double target = std::numbers::pi / 2;
+    for (int f = 0; f < 60; ++f) {
+      sim.step_frame();
+      if (f < 2) continue;
+      const double spin = sim.body_poses()[0].angular_velocity[2];
+      ASSERT_NEAR(spin, target, 0.01 * target) << "frame " << f + 1;
+    }
+  }
+  {
+    Simulation sim(scene_with(R"("target_angle": -30, "motor_compliance": 1e-4)"));
+    for (int f = 0; f < 180; ++f) sim.step_frame();
+    const std::array<double, 4> q = sim.body_poses()[0].orientation;
+    const double angle = 2.0 * std::atan2(q[3], q[0]) * 180.0 / std::numbers::pi;  // about z
+    EXPECT_NEAR(angle, -30.0, 0.5);
+  }
+}
+
+// A hinged arm let go from horizontal falls against limits of [-40, 20] degrees (it swings
+// toward -90 without them): the angle never passes -40 by more than 0.5 degree.
+TEST(Joints, HingeLimitsHoldWithinHalfADegree) {
+  const SceneDef scene = load_scene_text(R"({
+    "domain": {"min": [-2, -2, -2], "max": [2, 2, 2]},
+    "rigid_bodies": [{"name": "arm", "size": [0.6, 0.05, 0.05], "density": 700, "position": [0.3, 0, 0]}],
+    "joints": [{"type": "hinge", "body_b": "arm", "anchor": [0, 0, 0], "axis": [0, 0, 1], "limits": [-40, 20]}]
+  })", "limits.json");
+  Simulation sim(scene);
+  double lowest = 0.0, worst_error = 0.0;
+  for (int f = 0; f < 180; ++f) {
+    const FrameMetrics m = sim.step_frame();
+    const std::array<double, 4> q = sim.body_poses()[0].orientation;
+    lowest = std::min(lowest, 2.0 * std::atan2(q[3], q[0]) * 180.0 / std::numbers::pi);
+    worst_error = std::max(worst_error, m.error("joint_angle_error")->max);
+  }
+  EXPECT_LT(lowest, -39.0) << "the arm should reach its limit";
+  EXPECT_GT(lowest, -40.5);
+  EXPECT_LT(worst_error * 180.0 / std::numbers::pi, 0.5);
+}
+
+// ---- The shipped scene: threads and checkpoints ------------------------------------------------
+
+namespace {
+
+SceneDef pendulums_scene() { return load_scene_file(std::string(SEICHE_SCENES_DIR) + "/pendulums.json"); }
+
+}  // namespace
+
+TEST(Joints, PendulumsAreBitIdenticalOnOneTwoAndThreeThreads) {
+  const SceneDef scene = pendulums_scene();
+  auto run = [&](int threads) {
+    return run_with_threads(threads, [&] {
+      Simulation sim(scene);
+      for (int f = 0; f < 30; ++f) sim.step_frame(FrameMeasure::Skip);
+      return encode_bodies_jsonl(scene, sim.body_poses());
+    });
+  };
+  const std::string one = run(1);
+  EXPECT_EQ(std::count(one.begin(), one.end(), '\n'), 6);
+  EXPECT_EQ(run(2), one);
+  EXPECT_EQ(run(3), one);
+}
+
+// The bodies' state is the checkpoint's chunk "rigid.bodies": a resumed simulation continues bit
+// for bit (the text of bodies.%04d.jsonl carries every bit: shortest round-trip doubles).
+TEST(Joints, CheckpointContinuesBitForBitWithTheBodies) {
+  const SceneDef scene = pendulums_scene();
+  const fs::path dir = fs::temp_directory_path() / "seiche_rigid_checkpoint";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const fs::path file = dir / "checkpoint.bin";
+  Simulation straight(scene);
+  for (int f = 0; f < 20; ++f) straight.step_frame();
+  write_file_atomically(file, encode_checkpoint(straight, 20));
+  for (int f = 0; f < 10; ++f) straight.step_frame();
+
+  const Checkpoint cp = read_checkpoint(file);
+  const CheckpointChunks::Chunk* bodies = cp.chunks.find("rigid.bodies");
+  ASSERT_NE(bodies, nullptr);
+  EXPECT_EQ(bodies->bytes.size(), 6u * 13u * sizeof(double));
+  Simulation resumed(scene);
+  restore_checkpoint(resumed, cp, 20, file);
+  const std::string before = encode_bodies_jsonl(scene, Simulation(scene).body_poses());
+  EXPECT_NE(encode_bodies_jsonl(scene, resumed.body_poses()), before);
+  for (int f = 0; f < 10; ++f) resumed.step_frame();
+  EXPECT_EQ(encode_bodies_jsonl(scene, resumed.body_poses()), encode_bodies_jsonl(scene, straight.body_poses()));
+  fs::remove_all(dir);
+}
+
+// ---- Fixed, distance and slider joints ---------------------------------------------------------
+
+namespace {
+
+double world_angle_about_z(const BodyPose& p) { return 2.0 * std::atan2(p.orientation[3], p.orientation[0]); }
+
+}  // namespace
+
+// Two boxes welded by a fixed joint, swinging as one pendulum from a ball joint, at the defaults
+// (8 x 2): their relative orientation stays within 0.1 degree (0.07 measured) and their anchor
+// within 0.1 % of the length (0.04 %).
+TEST(Joints, FixedJointHoldsTwoBodiesAsOne) {
+  const SceneDef scene = load_scene_text(R"({
+    "domain": {"min": [-2, -2, -2], "max": [2, 2, 2]},
+    "rigid_bodies": [
+      {"name": "arm", "size": [0.4, 0.05, 0.05], "position": [0.2, 0, 0]},
+      {"name": "hand", "size": [0.05, 0.2, 0.05], "position": [0.425, -0.075, 0]}],
+    "joints": [{"body_b": "arm", "anchor": [0, 0, 0]},
+               {"type": "fixed", "body_a": "arm", "body_b": "hand", "anchor": [0.4, 0, 0]}]
+  })", "weld.json");
+  Simulation sim(scene);
+  double worst_angle = 0.0, worst_drift = 0.0, swing = 0.0;
+  for (int f = 0; f < 120; ++f) {
+    const FrameMetrics m = sim.step_frame();
+    worst_angle = std::max(worst_angle, m.error("joint_angle_error")->max);
+    worst_drift = std::max(worst_drift, m.error("joint_drift")->max);
+    const std::vector<BodyPose> p = sim.body_poses();
+    worst_angle = std::max(worst_angle, std::fabs(wrap_angle(world_angle_about_z(p[1]) - world_angle_about_z(p[0]))));
+    swing = std::min(swing, world_angle_about_z(p[0]));
+  }
+  EXPECT_LT(swing, -1.0) << "the welded pair should swing down";
+  EXPECT_LT(worst_angle * 180.0 / std::numbers::pi, 0.1);
+  EXPECT_LT(worst_drift, 1e-3);
+}
+
+// A ball on a rope (distance joint [0, 0.5]) that starts 0.2 m below its anchor falls freely
+// until the rope is taut, then swings on it: while slack it follows free fall, and the rope
+// never stretches more than 0.1 % past 0.5 m. A rod ([0.3, 0.3] from the start) holds both ways.
+TEST(Joints, DistanceJointIsARopeOrARod) {
+  const SceneDef scene = load_scene_text(R"({
+    "domain": {"min": [-2, -2, -2], "max": [2, 2, 2]},
+    "rigid_bodies": [{"name": "ball", "shape": "sphere", "radius": 0.05, "position": [0.1, -0.2, 0]},
+                     {"name": "weight", "shape": "sphere", "radius": 0.05, "position": [1.0, 0, 0]}],
+    "joints": [{"type": "distance", "body_b": "ball", "anchor": [0, 0, 0], "anchor_b": [0.1, -0.2, 0],
+                "distance": [0, 0.5]},
+               {"type": "distance", "body_b": "weight", "anchor": [0.7, 0, 0], "anchor_b": [1.0, 0, 0]}]
+  })", "rope.json");
+  Simulation sim(scene);
+  double longest = 0.0, rod_short = 1.0, rod_long = 0.0;
+  bool checked_free_fall = false;
+  for (int f = 0; f < 180; ++f) {
+    sim.step_frame();
+    const std::vector<BodyPose> p = sim.body_poses();
+    const double rope = std::hypot(p[0].position[0], p[0].position[1], p[0].position[2]);
+    longest = std::max(longest, rope);
+    const double rod = std::hypot(p[1].position[0] - 0.7, p[1].position[1], p[1].position[2]);
+    rod_short = std::min(rod_short, rod), rod_long = std::max(rod_long, rod);
+    if (f == 5) {  // t = 0.1 s: still slack (it falls 4.9 cm of the 0.27 m it may)
+      const double t = sim.time(), h = 1.0 / 480.0;
+      const double g = double(-9.81f);  // as the scene's float32 values give them
+      EXPECT_NEAR(p[0].position[1], double(-0.2f) + 0.5 * g * t * t + 0.5 * g * h * t, 1e-9);
+      EXPECT_EQ(p[0].position[0], double(0.1f));
+      checked_free_fall = true;
+    }
+  }
+  EXPECT_TRUE(checked_free_fall);
+  EXPECT_GT(longest, 0.499) << "the rope should go taut";
+  EXPECT_LT(longest, 0.5005);
+  EXPECT_NEAR(rod_short, 0.3, 3e-4);
+  EXPECT_NEAR(rod_long, 0.3, 3e-4);
+}
+
+// A box on a slider along an incline of 30 degrees (world to body): it slides down the axis
+// with a = g sin 30 (s = a t^2 / 2 within 1 %), does not turn, does not leave the axis, and stops
+// at the end of its travel (-0.4 m).
+TEST(Joints, SliderMovesOnlyAlongItsAxisWithinItsTravel) {
+  const SceneDef scene = load_scene_text(R"({
+    "domain": {"min": [-2, -2, -2], "max": [2, 2, 2]},
+    "rigid_bodies": [{"name": "cart", "size": [0.2, 0.1, 0.1], "position": [0, 0, 0], "axis": [0, 0, 1], "angle": 30}],
+    "joints": [{"type": "slider", "body_b": "cart", "anchor": [0, 0, 0], "axis": [0.8660254, 0.5, 0],
+                "travel": [-0.4, 0.4]}]
+  })", "slider.json");
+  Simulation sim(scene);
+  const double a = 9.81 * 0.5, axis_x = std::cos(std::numbers::pi / 6), axis_y = 0.5;
+  double worst_off_axis = 0.0, worst_turn = 0.0, lowest = 0.0;
+  for (int f = 0; f < 90; ++f) {
+    sim.step_frame();
+    const BodyPose p = sim.body_poses()[0];
+    const double along = p.position[0] * axis_x + p.position[1] * axis_y;
+    worst_off_axis = std::max(worst_off_axis, std::hypot(p.position[0] - along * axis_x, p.position[1] - along * axis_y,
+                                                         p.position[2]));
+    worst_turn = std::max(worst_turn, std::fabs(world_angle_about_z(p) - std::numbers::pi / 6));
+    lowest = std::min(lowest, along);
+    if (f == 14) {  // t = 0.25 s: 0.153 m down the axis
+      const double t = sim.time();
+      EXPECT_NEAR(-along, 0.5 * a * t * t, 0.01 * 0.5 * a * t * t);
+    }
+  }
+  EXPECT_LT(worst_off_axis, 1e-6);
+  EXPECT_LT(worst_turn, 1e-6);
+  EXPECT_GT(lowest, -0.4 - 2e-3);
+  EXPECT_LT(lowest, -0.399) << "the cart should reach the end of its travel";
+}
