@@ -731,6 +731,10 @@ TEST(DistanceForests, AreBitIdenticalOnOneTwoAndThreeThreadsAfterReorders) {
   Simulation built(scene);
   ASSERT_EQ(built.distance()->forests().size(), 1u);
   EXPECT_EQ(built.distance()->forests()[0].trees(), 3u);
+  built.step_frame();
+  bool raw_moved = false;  // the raw particles (the first ids) are reordered too
+  for (std::size_t i = 0; i < scene.particles.size(); ++i) raw_moved |= built.particles().id[i] != int(i);
+  EXPECT_TRUE(raw_moved);
   const auto one = state_bits(scene, 20, 1);
   EXPECT_EQ(state_bits(scene, 20, 2), one);
   EXPECT_EQ(state_bits(scene, 20, 3), one);
