@@ -27,6 +27,12 @@
 //   DistanceChains (distance_constraint.hpp) on block n in lattice order: the n^2 rows along x are
 //     chains of n particles, n^2 (n - 1) stiff-ish links (compliance 1e-8 m/N, rest length s, so
 //     every link is active), two colors; one XPBD iteration per call.
+//   HeavyChainForest, HeavyChainGaussSeidel (distance_tree.hpp, distance_constraint.hpp), Args:
+//     links n = 100, 1000, threads: one iteration of the raw distance family on the heavy
+//     chain (make_heavy_chain: pinned at the top, its last particle 1000 times heavier, the
+//     predicted positions jittered by +-1 % of a link), either the exact forest solve (one tree,
+//     serial) or one colored Gauss-Seidel sweep (two colors, packing and unpacking the chain as
+//     the iteration does); positions and multipliers restored before every call, untimed.
 //   Tethers (tethers.hpp) on sheet n: the row z = 0 pinned, every other vertex tied to its 4
 //     nearest pinned vertices (as cloth_solver.cpp does), max length its rest distance; the
 //     predicted positions are stretched 3 % away from the pins and jittered by +-0.2 cm.
@@ -71,6 +77,8 @@
 #include "lattice_block.hpp"
 #include "seiche/kernels/collisions.hpp"
 #include "seiche/kernels/distance_constraint.hpp"
+#include "seiche/kernels/distance_tree.hpp"
+#include "seiche/kernels/shortest_path_forest.hpp"
 #include "seiche/kernels/integrate.hpp"
 #include "seiche/kernels/particle_contacts.hpp"
 #include "seiche/kernels/pbf_density.hpp"
@@ -268,6 +276,44 @@ Chains make_chains(int n) {
       i.push_back(row * n + k), j.push_back(row * n + k + 1);
   const std::vector<float> rest(i.size(), kSpacing), compliance(i.size(), 1e-8f);
   kernels::color_distance_constraints(i, j, rest, compliance, c.particles.size(), c.links);
+  return c;
+}
+
+// The heavy chain at n links: n + 1 particles hanging straight down from a pinned first
+// one, kSpacing apart, the last 1000 times heavier (w = 1e-3, the others 1); the predicted
+// positions jittered by +-1 % of the link length in every direction, so that every link is off
+// its rest length. As one forest (the raw distance family's default for a chain) and colored.
+struct HeavyChain {
+  Particles particles;
+  kernels::DistanceConstraints links;
+  kernels::DistanceForest forest;
+};
+
+HeavyChain make_heavy_chain(int n) {
+  HeavyChain c;
+  Particles& p = c.particles;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> jitter(-0.01f * kSpacing, 0.01f * kSpacing);
+  for (int k = 0; k <= n; ++k) {
+    p.x.push_back(0.0f), p.y.push_back(-kSpacing * float(k)), p.z.push_back(0.0f);
+    p.px.push_back(p.x.back() + jitter(rng)), p.py.push_back(p.y.back() + jitter(rng));
+    p.pz.push_back(p.z.back() + jitter(rng));
+    p.vx.push_back(0.0f), p.vy.push_back(0.0f), p.vz.push_back(0.0f);
+    p.w.push_back(k == 0 ? 0.0f : k == n ? 1e-3f : 1.0f);
+    p.radius.push_back(0.0f);
+  }
+  std::vector<std::uint32_t> i, j;
+  std::vector<std::array<std::uint32_t, 2>> edges;
+  for (std::uint32_t k = 0; k < std::uint32_t(n); ++k) i.push_back(k), j.push_back(k + 1), edges.push_back({k, k + 1});
+  const std::vector<float> rest(i.size(), kSpacing), compliance(i.size(), 0.0f);
+  const std::vector<std::uint32_t> source = kernels::color_distance_constraints(i, j, rest, compliance, p.size(), c.links);
+  // The forest as the raw distance family grows it (distance_solver.cpp): from the pin.
+  const std::vector<double> length(i.size(), double(kSpacing));
+  std::vector<std::uint8_t> pinned(p.size(), 0), used(i.size(), 0);
+  pinned[0] = 1;
+  std::vector<kernels::ForestLinks> links(1);
+  kernels::grow_shortest_path_forest(p.size(), edges, length, pinned, 0, 0, used, links[0]);
+  c.forest = std::move(kernels::make_distance_forests(links, source)[0]);
   return c;
 }
 
@@ -487,6 +533,30 @@ void BM_DistanceChains(benchmark::State& state) {
   report(state, double(c.links.size()), "s_per_constraint");
 }
 
+// One iteration on the heavy chain: the exact forest solve (forest = true) or a colored
+// Gauss-Seidel sweep on the columns (packing and unpacking the chain, as the iteration does when
+// the forests run on the columns before it), from the same predicted positions and multipliers 0
+// every call (restored untimed); tension 0 (the first substep's).
+void BM_HeavyChain(benchmark::State& state, bool forest) {
+  const auto threads = thread_limit(state);
+  const HeavyChain& setup = cached<make_heavy_chain>(int(state.range(0)));
+  HeavyChain c = setup;
+  const std::vector<float> tension(c.links.size(), 0.0f);
+  for (auto _ : state) {
+    state.PauseTiming();
+    c.particles.restore_predicted(setup.particles);
+    std::fill(c.links.lambda.begin(), c.links.lambda.end(), 0.0f);
+    state.ResumeTiming();
+    if (forest)
+      kernels::solve_distance_forest(c.particles.view(), c.links, c.forest, kDt, tension.data());
+    else
+      kernels::solve_distance_constraints(c.particles.view(), c.links, kDt);
+    benchmark::ClobberMemory();
+  }
+  state.counters["constraints"] = double(c.links.size());
+  report(state, double(c.links.size()), "s_per_constraint");
+}
+
 void BM_Tethers(benchmark::State& state) {
   const auto threads = thread_limit(state);
   const TetherSheet& s = cached<make_tether_sheet>(int(state.range(0)));
@@ -601,6 +671,10 @@ void args(benchmark::internal::Benchmark* b, std::initializer_list<int> sizes) {
 }
 void block_sizes(benchmark::internal::Benchmark* b) { args(b, {40, 64, 100}); }
 void sheet_sizes(benchmark::internal::Benchmark* b) { args(b, {256, 512, 1024}); }
+void chain_sizes(benchmark::internal::Benchmark* b) {
+  args(b, {100, 1000});
+  b->Unit(benchmark::kMicrosecond);
+}
 void triad_size(benchmark::internal::Benchmark* b) {
   args(b, {int((std::size_t(64) << 20) / sizeof(float))});  // 64 MiB per array
   b->ArgNames({"elements", "threads"});
@@ -619,6 +693,8 @@ BENCHMARK_TEMPLATE(BM_Fluid, FluidPass::Confinement)
     ->Name("VorticityConfinement")
     ->Apply(block_sizes);
 BENCHMARK(BM_DistanceChains)->Name("DistanceChains")->Apply(block_sizes);
+BENCHMARK_CAPTURE(BM_HeavyChain, forest, true)->Name("HeavyChainForest")->Apply(chain_sizes);
+BENCHMARK_CAPTURE(BM_HeavyChain, gauss_seidel, false)->Name("HeavyChainGaussSeidel")->Apply(chain_sizes);
 BENCHMARK(BM_Tethers)->Name("Tethers")->Apply(sheet_sizes);
 BENCHMARK(BM_ParticleContacts)->Name("ParticleContacts")->Apply(sheet_sizes);
 BENCHMARK(BM_ShapeMatching)->Name("ShapeMatching")->Apply(block_sizes);

@@ -12,6 +12,7 @@
 #include <sstream>
 #include <tuple>
 
+#include "families/distance/distance_solver.hpp"
 #include "seiche/bake.hpp"
 #include "seiche/kernels/simd_info.hpp"
 #include "seiche/checkpoint.hpp"
@@ -337,6 +338,44 @@ TEST(Checkpoint, ClothStretchMultipliersAreTheClothFamilysChunk) {
   EXPECT_NE(std::memcmp(forgetful.particles().y.data(), straight.particles().y.data(),
                         straight.particles().size() * 4),
             0);
+}
+
+TEST(Checkpoint, DistanceForestMultipliersAreTheDistanceFamilysChunk) {
+  // The mixed scene's chain hangs from a pinned particle: one forest, whose geometric stiffness
+  // reads the multipliers of the substep before. Its fluid reorders the store every substep.
+  const SceneDef scene = mixed_scene();
+  const std::uint64_t fingerprint = mixed_recipe(1, 12).scene_fingerprint();
+  const fs::path file = fresh_dir("distance_chunk") / "checkpoint.bin";
+  Simulation straight(scene);
+  ASSERT_TRUE(straight.distance() && straight.distance()->has_forests());
+  for (int f = 0; f < 3; ++f) straight.step_frame();
+  write_file_atomically(file, encode_checkpoint(straight, fingerprint));
+  for (int f = 0; f < 3; ++f) straight.step_frame();
+
+  const Checkpoint cp = read_checkpoint(file);
+  const CheckpointChunks::Chunk* chunk = cp.chunks.find("distance.multipliers");
+  ASSERT_NE(chunk, nullptr);
+  EXPECT_EQ(chunk->bytes.size(), 4u * 4u);  // one float per constraint
+  Simulation resumed(scene);
+  restore_checkpoint(resumed, cp, fingerprint, file);
+  for (int f = 0; f < 3; ++f) resumed.step_frame();
+  expect_same_state(resumed.particles(), straight.particles(), "chain after stepping on");
+
+  // The chunk matters: zeroed multipliers continue to other bits.
+  Checkpoint zeroed = cp;
+  zeroed.chunks = {};
+  for (const CheckpointChunks::Chunk& c : cp.chunks.all())
+    zeroed.chunks.put(c.name, c.name == chunk->name ? std::string(c.bytes.size(), '\0') : c.bytes);
+  Simulation forgetful(scene);
+  restore_checkpoint(forgetful, zeroed, fingerprint, file);
+  for (int f = 0; f < 3; ++f) forgetful.step_frame();
+  const auto chain_y = [](const ParticleStore& s) {
+    std::vector<float> y(5);
+    for (std::size_t i = 0; i < s.size(); ++i)
+      if (s.id[i] < 5) y[std::size_t(s.id[i])] = s.y[i];  // the raw particles have the first ids
+    return y;
+  };
+  EXPECT_NE(chain_y(forgetful.particles()), chain_y(straight.particles()));
 }
 
 TEST(Checkpoint, ColumnsAndChunksAreReadByNameAndCheckedAgainstTheScene) {

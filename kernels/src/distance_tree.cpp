@@ -189,25 +189,23 @@ void DistanceForest::remap(std::span<const std::uint32_t> new_index) {
 
 DistanceForest make_distance_forest(std::span<const std::uint32_t> particle,
                                     std::span<const std::uint32_t> parent,
-                                    std::span<const std::uint32_t> edge) {
+                                    std::span<const std::uint32_t> edge, std::size_t min_vertices) {
   const std::size_t n = particle.size();
   constexpr std::uint32_t kRoot = DistanceForest::kRoot;
-  // Tree of each position (the position of its root) and whether a root has children.
-  std::vector<std::uint32_t> root(n);
-  std::vector<std::uint8_t> has_child(n, 0);
+  min_vertices = std::max<std::size_t>(min_vertices, 2);
+  // Tree of each position (the position of its root) and the number of vertices of each root's tree.
+  std::vector<std::uint32_t> root(n), vertices(n, 0);
   for (std::size_t i = 0; i < n; ++i) {
     root[i] = parent[i] == kRoot ? std::uint32_t(i) : root[parent[i]];
-    if (parent[i] != kRoot) has_child[parent[i]] = 1;
+    ++vertices[root[i]];
   }
   // Trees in the order of their roots, positions in the given order inside each tree.
   std::vector<std::uint32_t> tree_of_root(n, kRoot), tree_size;
   for (std::size_t i = 0; i < n; ++i) {
-    if (parent[i] != kRoot || !has_child[i]) continue;
+    if (parent[i] != kRoot || vertices[i] < min_vertices) continue;
     tree_of_root[i] = std::uint32_t(tree_size.size());
-    tree_size.push_back(0);
+    tree_size.push_back(std::uint32_t(vertices[i]));
   }
-  for (std::size_t i = 0; i < n; ++i)
-    if (tree_of_root[root[i]] != kRoot) ++tree_size[tree_of_root[root[i]]];
   DistanceForest f;
   f.tree_start.assign(tree_size.size() + 1, 0);
   for (std::size_t t = 0; t < tree_size.size(); ++t) f.tree_start[t + 1] = f.tree_start[t] + tree_size[t];

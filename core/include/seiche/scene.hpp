@@ -43,6 +43,11 @@ struct SolverDef {
   float tensile_dq = 0.2f;  ///< dq as a fraction of the kernel radius, in (0, 1)
   /// Velocity damping c (1/s, >= 0): v *= exp(-c dt) every substep; 0 = off (no pass).
   float damping = 0.0f;
+  /// Spanning forests of the raw distance constraints solved exactly every iteration before
+  /// their Gauss-Seidel sweep (0..3; 0 = Gauss-Seidel only), grown from the pinned particles
+  /// (core/src/families/distance/distance_solver.hpp). Absent: one over the connected pieces
+  /// without loops, none over those with loops.
+  std::optional<int> distance_forests;
 };
 
 /// "domain": the box that holds every particle. Particles are projected back inside it.

@@ -48,6 +48,7 @@ inline constexpr int kDistanceReset = 0;     // BeginSubstep
 inline constexpr int kClothReset = 10;
 inline constexpr int kJointReset = 20;
 inline constexpr int kFluidDensity = 0;      // Iterate
+inline constexpr int kDistanceForests = 9;   // on the columns, before the colored constraints
 inline constexpr int kDistance = 10;
 inline constexpr int kClothStretchForests = 19;  // on the columns, before the colored edges
 inline constexpr int kClothStretch = 20;     //   distance, stretch and bending share one pack

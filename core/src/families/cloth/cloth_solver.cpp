@@ -10,6 +10,7 @@
 
 #include "seiche/kernels/blocked_reduce.hpp"
 #include "seiche/kernels/dihedral_bending.hpp"
+#include "seiche/kernels/shortest_path_forest.hpp"
 #include "seiche/phase.hpp"
 
 namespace seiche {
@@ -51,57 +52,6 @@ std::vector<double> edge_path_distances(const ClothShape& shape, std::uint32_t s
   return d;
 }
 
-// A shortest-path forest (Dijkstra on the rest lengths) over the cloth's edges not yet `used`,
-// grown from all its pinned vertices at once: the paths along which a pin holds the cloth. A
-// piece that no pin reaches grows from its lowest vertex (a free root). Appends the vertices in
-// the order they are settled (a parent before its children), as store indices base + v, with
-// the position of the parent (offset by the positions already in `out`) and the edge's index
-// edge_base + e; marks the edges it takes as used.
-struct RawForest {
-  std::vector<std::uint32_t> particle, parent, edge;
-};
-void grow_shortest_path_forest(const ClothShape& shape, std::size_t base, std::span<const std::uint8_t> pinned,
-                               std::size_t edge_base, std::vector<std::uint8_t>& used, RawForest& out) {
-  constexpr std::uint32_t kRoot = kernels::DistanceForest::kRoot;
-  const auto& x = shape.mesh.positions;
-  const auto& edges = shape.topology.edges;
-  const std::size_t n = x.size();
-  std::vector<std::vector<std::pair<std::uint32_t, std::uint32_t>>> neighbors(n);  // (vertex, edge)
-  for (std::size_t e = 0; e < edges.size(); ++e) {
-    if (used[e]) continue;
-    neighbors[edges[e][0]].push_back({edges[e][1], std::uint32_t(e)});
-    neighbors[edges[e][1]].push_back({edges[e][0], std::uint32_t(e)});
-  }
-  std::vector<double> d(n, std::numeric_limits<double>::infinity());
-  std::vector<std::uint32_t> parent(n, kRoot), parent_edge(n, 0), position(n, 0);
-  std::vector<std::uint8_t> settled(n, 0);
-  using Item = std::pair<double, std::uint32_t>;
-  std::priority_queue<Item, std::vector<Item>, std::greater<>> queue;
-  auto grow = [&] {
-    while (!queue.empty()) {
-      const auto [du, u] = queue.top();
-      queue.pop();
-      if (settled[u] || du > d[u]) continue;
-      settled[u] = 1;
-      position[u] = std::uint32_t(out.particle.size());
-      out.particle.push_back(std::uint32_t(base + u));
-      out.parent.push_back(parent[u] == kRoot ? kRoot : position[parent[u]]);
-      out.edge.push_back(parent[u] == kRoot ? 0u : std::uint32_t(edge_base + parent_edge[u]));
-      if (parent[u] != kRoot) used[parent_edge[u]] = 1;
-      for (const auto& [v, e] : neighbors[u]) {
-        if (settled[v] || pinned[v]) continue;  // a pin is always a root
-        const double dv = du + distance(x[u], x[v]);
-        if (dv < d[v]) d[v] = dv, parent[v] = u, parent_edge[v] = e, queue.push({dv, v});
-      }
-    }
-  };
-  for (std::size_t v = 0; v < n; ++v)
-    if (pinned[v]) d[v] = 0.0, queue.push({0.0, std::uint32_t(v)});
-  grow();
-  for (std::size_t v = 0; v < n; ++v)
-    if (!settled[v]) d[v] = 0.0, queue.push({0.0, std::uint32_t(v)}), grow();
-}
-
 }  // namespace
 
 ClothShape build_cloth_shape(const ClothDef& cloth, std::size_t index, const std::string& file) {
@@ -133,7 +83,7 @@ ClothSolver::~ClothSolver() = default;
 void ClothSolver::create(ParticleStore& store, std::size_t first, const kernels::ParticleView& view) {
   std::vector<std::uint32_t> edge_i, edge_j, hinge_dihedral, hinge_isometric;
   std::vector<float> edge_rest, edge_compliance, bend_dihedral, bend_isometric;
-  std::vector<RawForest> raw_forests;
+  std::vector<kernels::ForestLinks> raw_forests;
   std::size_t base = first;
   for (std::size_t c = 0; c < shapes_.size(); ++c) {
     const ClothDef& def = scene_cloths_[c];
@@ -179,26 +129,24 @@ void ClothSolver::create(ParticleStore& store, std::size_t first, const kernels:
       compliance_list.push_back(def.bend_compliance);
     }
     if (def.tethers) build_tethers(c, base, pinned);
-    // Forests of the edges, each over the edges the previous ones left (kernels/distance_tree.hpp).
+    // Shortest-path forests of the edges on their rest lengths, each over the edges the previous
+    // ones left (kernels/shortest_path_forest.hpp).
     std::vector<std::uint8_t> used(topo.edges.size(), 0);
     // By default (the key absent) one forest for a cloth with pins, none without.
     const bool has_pins = std::find(pinned.begin(), pinned.end(), std::uint8_t(1)) != pinned.end();
     const int forests = def.stretch_forests.value_or(has_pins ? 1 : 0);
     if (raw_forests.size() < std::size_t(forests)) raw_forests.resize(std::size_t(forests));
+    std::vector<double> edge_length;
+    if (forests > 0)
+      for (const auto& e : topo.edges) edge_length.push_back(distance(mesh.positions[e[0]], mesh.positions[e[1]]));
     for (int k = 0; k < forests; ++k)
-      grow_shortest_path_forest(shapes_[c], base, pinned, edge_i.size() - topo.edges.size(), used,
-                                raw_forests[std::size_t(k)]);
+      kernels::grow_shortest_path_forest(n, topo.edges, edge_length, pinned, base,
+                                         edge_i.size() - topo.edges.size(), used, raw_forests[std::size_t(k)]);
     base += n;
   }
   const std::vector<std::uint32_t> source =
       kernels::color_distance_constraints(edge_i, edge_j, edge_rest, edge_compliance, view.n, stretch_);
-  std::vector<std::uint32_t> colored_index(source.size());
-  for (std::size_t k = 0; k < source.size(); ++k) colored_index[source[k]] = std::uint32_t(k);
-  for (RawForest& raw : raw_forests) {
-    for (std::size_t i = 0; i < raw.edge.size(); ++i)
-      if (raw.parent[i] != kernels::DistanceForest::kRoot) raw.edge[i] = colored_index[raw.edge[i]];
-    forests_.push_back(kernels::make_distance_forest(raw.particle, raw.parent, raw.edge));
-  }
+  forests_ = kernels::make_distance_forests(raw_forests, source);
   if (!forests_.empty()) tension_.assign(stretch_.size(), 0.0f);
   if (!bend_dihedral.empty()) kernels::build_dihedral_bending(hinge_dihedral, bend_dihedral, view, dihedral_);
   if (!bend_isometric.empty())

@@ -1,7 +1,8 @@
 // The raw distance constraints of a scene ("distance_constraints", distance_solver.hpp): the
-// XPBD multipliers reset every substep, one colored solve every iteration (on the iteration
-// record), the particle indices remapped after a reorder, |C| / rest_length measured at the end
-// of a frame.
+// XPBD multipliers reset every substep, every iteration the forests' exact solve (on the
+// columns) and one colored solve (on the iteration record), the particle indices remapped after
+// a reorder, |C| / rest_length measured at the end of a frame, the multipliers the forests carry
+// across substeps saved in checkpoints.
 #pragma once
 
 #include <memory>
@@ -25,6 +26,11 @@ class DistanceFamily final : public Family {
   void remap(std::span<const std::uint32_t> new_index) override { solver_->remap(new_index); }
   kernels::IndexRange packed_range() const override { return solver_->packed_range(); }
   void measure(FrameMetrics& m) override;
+  /// The multipliers of the last substep, which the forests' geometric stiffness reads in the
+  /// next one (kernels/distance_tree.hpp): chunk "distance.multipliers", in the constraints'
+  /// (scene-determined) order, empty without forests.
+  void save_state(CheckpointChunks& chunks) const override;
+  void restore_state(const CheckpointChunks& chunks) override;
 
  private:
   ParticleStore& store_;

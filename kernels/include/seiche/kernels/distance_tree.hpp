@@ -74,10 +74,11 @@ struct DistanceForest {
 
 /// Builds a forest from parent links given in an order where every parent comes before its
 /// children (parent = kRoot for a root; edge ignored there): regroups it tree by tree, keeping
-/// that order inside each tree, and drops roots without children.
+/// that order inside each tree, and drops the trees of fewer than min_vertices vertices (at
+/// least the roots without children).
 DistanceForest make_distance_forest(std::span<const std::uint32_t> particle,
                                     std::span<const std::uint32_t> parent,
-                                    std::span<const std::uint32_t> edge);
+                                    std::span<const std::uint32_t> edge, std::size_t min_vertices = 2);
 
 /// The cap gamma of the geometric stiffness (above): at most this many times the lighter end's mass.
 inline constexpr float kGeometricStiffnessCap = 4.0f;
