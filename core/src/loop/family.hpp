@@ -55,6 +55,7 @@ inline constexpr int kParticleContacts = 30;
 inline constexpr int kShapeMatching = 40;    //   after the contacts: its clusters end rigid
 inline constexpr int kCollisions = 100;      //   last: nothing is pushed into a collider after it
 inline constexpr int kUpdate = 0;            // Update
+inline constexpr int kShapePlasticity = 10;   //   on the positions the substep ends with
 inline constexpr int kDamping = 0;           // Velocity
 inline constexpr int kVorticity = 10;
 inline constexpr int kViscosity = 20;
