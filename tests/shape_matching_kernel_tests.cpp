@@ -1,7 +1,7 @@
 // Shape matching kernels (kernels/shape_matching.hpp, shape_plasticity.hpp): the closest
 // rotation against known polar decompositions, degenerate and reflected inputs; one projection
 // of a deformed cluster against the rigid-body invariants (rest distances, centre of mass,
-// momentum); the linear goal against a shear and a stretch; degenerate clusters (a line, a
+// momentum); the linear goal against a shear, a stretch and a crush; degenerate clusters (a line, a
 // plane, one point) never give NaN; plastic flow above the yield only, bounded; overlapping
 // clusters keep the momentum.
 #include <gtest/gtest.h>
@@ -258,6 +258,31 @@ TEST(ShapeMatching, LinearBlendFollowsTheLinearFit) {
     EXPECT_NEAR(stretched.px[i], 1.2 * cx + 1.2 / k * qx, 1e-6);
     EXPECT_NEAR(stretched.py[i], cy + qy / k, 1e-6);
   }
+}
+
+TEST(ShapeMatching, ACrushedClusterGetsTheRigidGoal) {
+  // Squashed to a twentieth of its height (det A = 0.05, below 1/8): rescaled to its volume the
+  // linear fit would throw the goals 2.7 times as far out; the goal is the rigid one instead.
+  const double crush[9] = {1, 0, 0, 0, 0.05, 0, 0, 0, 1}, none[3] = {0, 0, 0};
+  Cluster linear, rigid;
+  for (Cluster* c : {&linear, &rigid}) c->deform(crush, none);
+  linear.clusters.linear_blend = {1.0f};
+  solve_shape_matching(linear.view(), linear.clusters);
+  solve_shape_matching(rigid.view(), rigid.clusters);
+  for (std::size_t i = 0; i < linear.x.size(); ++i) {
+    EXPECT_EQ(linear.px[i], rigid.px[i]);
+    EXPECT_EQ(linear.py[i], rigid.py[i]);
+  }
+  // Squashed to half (det 0.5): the linear goal keeps the squash, at the rest volume.
+  const double half[9] = {1, 0, 0, 0, 0.5, 0, 0, 0, 1};
+  Cluster squashed;
+  squashed.deform(half, none);
+  squashed.clusters.linear_blend = {1.0f};
+  solve_shape_matching(squashed.view(), squashed.clusters);
+  const double k = std::cbrt(0.5);
+  const std::size_t top = squashed.x.size() - 1;  // (0.2, 0.2, 0.1)
+  const double cy = squashed.y[top] - squashed.clusters.rest_y[top];
+  EXPECT_NEAR(squashed.py[top], 0.5 * cy + 0.5 / k * squashed.clusters.rest_y[top], 1e-6);
 }
 
 TEST(ShapeMatching, DegenerateClustersNeverGiveNaN) {

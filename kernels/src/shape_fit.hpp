@@ -124,6 +124,11 @@ inline bool fit_cluster(const ParticleView& p, const ShapeClusters& s, std::size
   return true;
 }
 
+/// A cluster whose volume changed by more than this factor (either way) is crushed or torn
+/// (a contact squashed it flat): its linear fit says nothing, and scaling it back to its volume
+/// would throw the goals far out. Müller 2005 leaves this open.
+inline constexpr double kMaxVolumeChange = 8.0;
+
 /// The best linear map from the rest shape to now, A = Apq Mqq^-1 with det A = 1; false where it
 /// is undefined (see shape_matching.hpp).
 inline bool linear_map(const ClusterFit& f, double a[9]) {
@@ -131,7 +136,7 @@ inline bool linear_map(const ClusterFit& f, double a[9]) {
   if (!invert_moment(f.mqq, inv)) return false;
   multiply(f.apq, inv, a);
   const double det = determinant(a);
-  if (!(det > 0.0) || !std::isfinite(det)) return false;
+  if (!(det > 1.0 / kMaxVolumeChange) || !(det < kMaxVolumeChange)) return false;
   const double scale = 1.0 / cube_root(det);
   for (int k = 0; k < 9; ++k) a[k] *= scale;
   return all_finite(a);

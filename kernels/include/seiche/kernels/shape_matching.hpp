@@ -12,7 +12,8 @@
 //   A  /= det(A)^(1/3)                               (volume kept)
 //   T   = beta A + (1 - beta) R                      (beta 1: any linear deformation is a goal)
 // The linear part is left out (T = R) where it is undefined: a flat, linear or coincident
-// cluster (Aqq singular: det below 1e-9 of (trace / 3)^3), det A <= 0 (inverted), non-finite.
+// cluster (Aqq singular: det below 1e-9 of (trace / 3)^3), a crushed, inverted or torn one
+// (det A outside (1/8, 8): rescaling it to its volume would throw the goals far out), non-finite.
 // Moving every particle to its goal keeps the centre of mass and the momentum (sum m_i (g_i -
 // p_i) = 0 since sum m_i q_i = 0). R comes from the iterative method of Müller, Bender,
 // Chentanez and Macklin 2016 ("A robust method to extract the rotational part of
