@@ -66,7 +66,8 @@ double largest_distance_change(const std::vector<std::array<double, 3>>& a,
 
 // RMS distance of the particles from the best rigid fit of the rest positions (equal masses): the
 // rest shape turned by the rotation closest to A = sum (x - c)(r - c_r)^T and placed at c.
-double rms_from_rigid_fit(const std::vector<std::array<double, 3>>& rest, const std::vector<std::array<double, 3>>& now) {
+double rms_from_rigid_fit(const std::vector<std::array<double, 3>>& rest,
+                          const std::vector<std::array<double, 3>>& now) {
   const std::size_t n = rest.size();
   double cr[3] = {0, 0, 0}, cx[3] = {0, 0, 0};
   for (std::size_t i = 0; i < n; ++i)
@@ -313,17 +314,16 @@ TEST(ShapeMatching, SpheresAndVoxelizedMeshesHaveTheirLatticesParticles) {
   // scenes/meshes/cube.obj scaled to 0.2 m at spacing 0.05: 4 x 4 x 4 inside, at the cube's
   // centre +- 0.025 and 0.075.
   const std::string meshes = std::string(SEICHE_SCENES_DIR) + "/meshes/";
-  const SceneDef cube = load_scene_text(R"({"shapes": [{"mesh": {"file": ")" + meshes +
-                                            R"(cube.obj", "scale": 0.2, "translate": [0.5, 0.5, 0.5]}, "spacing": 0.05}]})",
-                                        "cube.json");
+  auto mesh_scene = [&](const std::string& obj, const std::string& rest) {
+    return load_scene_text(R"({"shapes": [{"mesh": {"file": ")" + meshes + obj + R"(", )" + rest + "}]}", "mesh.json");
+  };
+  const SceneDef cube = mesh_scene("cube.obj", R"("scale": 0.2, "translate": [0.5, 0.5, 0.5]}, "spacing": 0.05)");
   Simulation boxed(cube);
   ASSERT_EQ(boxed.particles().size(), 64u);
   for (std::size_t i = 0; i < 64; ++i) EXPECT_LT(std::fabs(boxed.particles().x[i] - 0.5f), 0.1f);
   // The icosphere (radius 1, 320 triangles) scaled to 0.1 m at spacing 0.02: less than the ball
   // (the twice-subdivided icosahedron holds 0.94 of it; its lattice points measure 0.92).
-  const SceneDef ico = load_scene_text(R"({"shapes": [{"mesh": {"file": ")" + meshes +
-                                           R"(icosphere.obj", "scale": 0.1, "translate": [0.5, 0.5, 0.5]}, "spacing": 0.02}]})",
-                                       "ico.json");
+  const SceneDef ico = mesh_scene("icosphere.obj", R"("scale": 0.1, "translate": [0.5, 0.5, 0.5]}, "spacing": 0.02)");
   Simulation icosphere(ico);
   const double ico_volume = double(icosphere.particles().size()) * 0.02 * 0.02 * 0.02;
   EXPECT_LT(ico_volume, double(expected) * 0.02 * 0.02 * 0.02);

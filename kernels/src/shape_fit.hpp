@@ -1,10 +1,11 @@
 // What shape matching and plastic flow share (internal to the kernels): 3 x 3 and quaternion
 // algebra in double, and the fit of one cluster to the predicted positions:
 //   c = sum m_i p_i / M,  Apq = sum m_i (p_i - c) q_i^T,  Mqq = sum m_i q_i q_i^T
-// with m_i = share_i / w_i and q_i the rest offset (Sp q_i for a plastic cluster). Each sum runs
-// in member order. Hand-written instead of Eigen: the kernel layer does not depend on Eigen, and
-// whether a library picks a SIMD path for a 3 x 3 product would be one more thing that could
-// make the bits differ between builds. Only + - * / sqrt: the same bits on every machine.
+// with m_i = share_i / w_i (1 / w_i outside overlapping clusters) and q_i the rest offset (Sp q_i
+// for a plastic cluster). Each sum runs in member order. Hand-written instead of Eigen: the
+// kernel layer does not depend on Eigen, and whether a library picks a SIMD path for a 3 x 3
+// product would be one more thing that could make the bits differ between builds. Only
+// + - * / sqrt: the same bits on every machine.
 #pragma once
 
 #include <cmath>
@@ -79,14 +80,24 @@ inline double cube_root(double d) {
   return x * scale;
 }
 
-/// Member k's rest offset in cluster c: q, or Sp q for a plastic cluster.
-inline void rest_offset(const ShapeClusters& s, std::size_t c, std::uint32_t k, double q[3]) {
-  q[0] = s.rest_x[k], q[1] = s.rest_y[k], q[2] = s.rest_z[k];
-  if (!(s.plasticity[c].creep > 0.0f)) return;
-  const Matrix3& sp = s.plastic[c];
-  const double q0[3] = {q[0], q[1], q[2]};
-  for (int row = 0; row < 3; ++row) q[row] = sp[3 * row] * q0[0] + sp[3 * row + 1] * q0[1] + sp[3 * row + 2] * q0[2];
-}
+/// The rest offsets of one cluster's members: q, or Sp q for a plastic cluster (read once per
+/// cluster, so that the member loops do not test the cluster's settings per member).
+struct RestShape {
+  const float *x, *y, *z;
+  const double* plastic;  ///< Sp, row-major; null for an elastic cluster
+
+  RestShape(const ShapeClusters& s, std::size_t c)
+      : x(s.rest_x.data()), y(s.rest_y.data()), z(s.rest_z.data()),
+        plastic(s.plasticity[c].creep > 0.0f ? s.plastic[c].data() : nullptr) {}
+
+  void offset(std::uint32_t k, double q[3]) const {
+    q[0] = x[k], q[1] = y[k], q[2] = z[k];
+    if (!plastic) return;
+    const double q0[3] = {q[0], q[1], q[2]};
+    for (int row = 0; row < 3; ++row)
+      q[row] = plastic[3 * row] * q0[0] + plastic[3 * row + 1] * q0[1] + plastic[3 * row + 2] * q0[2];
+  }
+};
 
 struct ClusterFit {
   double mass = 0.0;
@@ -95,31 +106,69 @@ struct ClusterFit {
   double mqq[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};  ///< only with_moment
 };
 
+// The centre of mass and Apq of cluster c: the rigid solve's hot loops, on raw pointers with
+// the sums in registers, compiled per case so that a cluster that does not overlap (its members
+// weigh their whole mass: m = 1 / w) and is elastic (no Sp) loads and tests nothing per member
+// beyond what the rigid goal needs.
+template <bool kShared, bool kPlastic>
+bool rigid_sums(const ParticleView& p, const ShapeClusters& s, std::size_t c, ClusterFit& f) {
+  const std::uint32_t begin = s.start[c], end = s.start[c + 1];
+  const std::uint32_t* particle = s.particle.data();
+  const float* share = s.share.data();
+  const float *w = p.w, *px = p.px, *py = p.py, *pz = p.pz;
+  const float *rx = s.rest_x.data(), *ry = s.rest_y.data(), *rz = s.rest_z.data();
+  const double* sp = s.plastic[c].data();
+  auto weight = [&](std::uint32_t k, std::uint32_t i) {
+    if constexpr (kShared) return double(share[k]) / double(w[i]);
+    else return 1.0 / double(w[i]);
+  };
+  double mass = 0.0, centre[3] = {0.0, 0.0, 0.0};
+  for (std::uint32_t k = begin; k < end; ++k) {
+    const std::uint32_t i = particle[k];
+    if (!(w[i] > 0.0f)) continue;  // pinned: weighs nothing here
+    const double m = weight(k, i);
+    mass += m;
+    centre[0] += m * px[i], centre[1] += m * py[i], centre[2] += m * pz[i];
+  }
+  if (!(mass > 0.0)) return false;
+  for (double& v : centre) v /= mass;
+  double apq[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+  for (std::uint32_t k = begin; k < end; ++k) {
+    const std::uint32_t i = particle[k];
+    if (!(w[i] > 0.0f)) continue;
+    const double m = weight(k, i);
+    const double d[3] = {m * (px[i] - centre[0]), m * (py[i] - centre[1]), m * (pz[i] - centre[2])};
+    double q[3] = {rx[k], ry[k], rz[k]};
+    if constexpr (kPlastic) {
+      const double q0[3] = {q[0], q[1], q[2]};
+      for (int row = 0; row < 3; ++row)
+        q[row] = sp[3 * row] * q0[0] + sp[3 * row + 1] * q0[1] + sp[3 * row + 2] * q0[2];
+    }
+    for (int row = 0; row < 3; ++row)
+      for (int col = 0; col < 3; ++col) apq[3 * row + col] += d[row] * q[col];
+  }
+  f.mass = mass;
+  for (int a = 0; a < 3; ++a) f.centre[a] = centre[a];
+  for (int k = 0; k < 9; ++k) f.apq[k] = apq[k];
+  return true;
+}
+
 /// The fit of cluster c; false where no member is movable (all pinned).
 inline bool fit_cluster(const ParticleView& p, const ShapeClusters& s, std::size_t c, bool with_moment,
                         ClusterFit& f) {
-  const std::uint32_t begin = s.start[c], end = s.start[c + 1];
-  for (std::uint32_t k = begin; k < end; ++k) {
-    const std::uint32_t i = s.particle[k];
-    if (!(p.w[i] > 0.0f)) continue;  // pinned: weighs nothing here
-    const double m = double(s.share[k]) / double(p.w[i]);
-    f.mass += m;
-    f.centre[0] += m * p.px[i], f.centre[1] += m * p.py[i], f.centre[2] += m * p.pz[i];
-  }
-  if (!(f.mass > 0.0)) return false;
-  for (double& v : f.centre) v /= f.mass;
-  for (std::uint32_t k = begin; k < end; ++k) {
+  const bool shared = s.overlapping[c] != 0, plastic = s.plasticity[c].creep > 0.0f;
+  const bool movable = shared ? (plastic ? rigid_sums<true, true>(p, s, c, f) : rigid_sums<true, false>(p, s, c, f))
+                              : (plastic ? rigid_sums<false, true>(p, s, c, f) : rigid_sums<false, false>(p, s, c, f));
+  if (!movable || !with_moment) return movable;  // Mqq only where asked: the rigid solve does not pay for it
+  const RestShape rest(s, c);
+  for (std::uint32_t k = s.start[c]; k < s.start[c + 1]; ++k) {
     const std::uint32_t i = s.particle[k];
     if (!(p.w[i] > 0.0f)) continue;
-    const double m = double(s.share[k]) / double(p.w[i]);
-    const double d[3] = {m * (p.px[i] - f.centre[0]), m * (p.py[i] - f.centre[1]), m * (p.pz[i] - f.centre[2])};
+    const double m = shared ? double(s.share[k]) / double(p.w[i]) : 1.0 / double(p.w[i]);
     double q[3];
-    rest_offset(s, c, k, q);
+    rest.offset(k, q);
     for (int row = 0; row < 3; ++row)
-      for (int col = 0; col < 3; ++col) f.apq[3 * row + col] += d[row] * q[col];
-    if (with_moment)
-      for (int row = 0; row < 3; ++row)
-        for (int col = 0; col < 3; ++col) f.mqq[3 * row + col] += m * q[row] * q[col];
+      for (int col = 0; col < 3; ++col) f.mqq[3 * row + col] += m * q[row] * q[col];
   }
   return true;
 }

@@ -91,18 +91,23 @@ void match_cluster(const ParticleView& p, ShapeClusters& s, std::size_t c) {
   const double* centre = fit.centre;
   const bool overlapping = s.overlapping[c] != 0;
   const double stiffness = s.stiffness[c];
-  for (std::uint32_t k = s.start[c]; k < s.start[c + 1]; ++k) {
-    const std::uint32_t i = s.particle[k];
-    if (!(p.w[i] > 0.0f)) continue;
+  const RestShape rest(s, c);
+  const std::uint32_t* particle = s.particle.data();
+  const float* w = p.w;
+  float *px = p.px, *py = p.py, *pz = p.pz;
+  for (std::uint32_t k = s.start[c], end = s.start[c + 1]; k < end; ++k) {
+    const std::uint32_t i = particle[k];
+    if (!(w[i] > 0.0f)) continue;
     double q[3];
-    rest_offset(s, c, k, q);
+    rest.offset(k, q);
     double goal[3];
-    for (int row = 0; row < 3; ++row) goal[row] = centre[row] + t[3 * row] * q[0] + t[3 * row + 1] * q[1] + t[3 * row + 2] * q[2];
+    for (int row = 0; row < 3; ++row)
+      goal[row] = centre[row] + t[3 * row] * q[0] + t[3 * row + 1] * q[1] + t[3 * row + 2] * q[2];
     if (overlapping) {
       s.goal_x[k] = goal[0], s.goal_y[k] = goal[1], s.goal_z[k] = goal[2];
       continue;
     }
-    float* pos[3] = {&p.px[i], &p.py[i], &p.pz[i]};
+    float* pos[3] = {&px[i], &py[i], &pz[i]};
     for (int row = 0; row < 3; ++row) *pos[row] = float(*pos[row] + stiffness * (goal[row] - *pos[row]));
   }
 }

@@ -75,7 +75,8 @@ struct ShapeClusters {
   // Per member.
   std::vector<std::uint32_t> particle;  ///< its store index
   std::vector<float> rest_x, rest_y, rest_z;  ///< q: offset from the cluster's rest centre of mass
-  std::vector<float> share;             ///< 1 / N_i: the part of the particle's mass it carries
+  std::vector<float> share;             ///< overlapping clusters: 1 / N_i, the part of the mass it
+                                        ///< carries (a member of another cluster weighs all of it)
 
   // Particles of overlapping clusters: each one's members, for the average of their goals.
   std::vector<std::uint32_t> shared_particle;  ///< store index
