@@ -126,6 +126,7 @@ struct ShapeDef {
   float spacing = 0.05f;            ///< m (> 0); each particle's collision radius is half of it
   float density = 1000.0f;          ///< kg/m^3 in (0, 1e5]: each particle weighs density spacing^3 (>= 1e-12 kg)
   float stiffness = 1.0f;           ///< in (0, 1]: 1 is rigid, less pulls part way each iteration
+  bool stiffness_per_substep = false;  ///< stiffness is what a substep removes, at any iteration count
   float linear_blend = 0.0f;        ///< in [0, 1]: beta of the goal beta A + (1 - beta) R
   float yield = 0.0f;               ///< >= 0: ||S - I||_F above which the rest shape flows
   float creep = 0.0f;               ///< 1/s (>= 0): rate of plastic flow; 0 is elastic

@@ -23,6 +23,15 @@ std::vector<std::int32_t> centres_around(std::int32_t i, std::int32_t h) {
   std::reverse(centres.begin(), centres.end());
   return centres;
 }
+
+// The pull of one iteration: `stiffness`, or with stiffness_per_substep the pull that, repeated
+// over a substep's iterations, removes the fraction `stiffness` of a lone cluster's deviation:
+// 1 - (1 - s)^(1 / iterations). std::pow runs once, here, not in the solve.
+float iteration_stiffness(const ShapeDef& s, const SolverDef& solver) {
+  if (!s.stiffness_per_substep) return s.stiffness;
+  return float(1.0 - std::pow(1.0 - double(s.stiffness), 1.0 / double(solver.iterations)));
+}
+
 }  // namespace
 
 std::size_t ShapeFamily::particle_count(const SceneDef& scene) {
@@ -34,7 +43,8 @@ std::size_t ShapeFamily::particle_count(const SceneDef& scene) {
 ShapeFamily::ShapeFamily(const SceneDef& scene, ParticleStore& store, std::size_t first) : store_(store) {
   std::size_t k = first;
   for (std::size_t c = 0; c < scene.shapes.size(); ++c) {
-    const ShapeDef& s = scene.shapes[c];
+    ShapeDef s = scene.shapes[c];
+    s.stiffness = iteration_stiffness(s, scene.solver);
     const ShapeSites sites = shape_sites(s, "shapes[" + std::to_string(c) + "]");
     const float mass = s.density * s.spacing * s.spacing * s.spacing;
     const std::size_t begin = k;

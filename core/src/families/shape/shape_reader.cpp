@@ -58,6 +58,10 @@ const KeyTable<ShapeDef>& shape_keys() {
       K("stiffness", &ShapeDef::stiffness, Range::left_open(0, 1))
           .doc("1 keeps the shape rigid; less pulls each particle that part of the way to its goal every "
                "iteration (soft)"),
+      K("stiffness_per_substep", &ShapeDef::stiffness_per_substep)
+          .doc("`true`: `stiffness` is the part of a deviation a lone cluster loses in one substep, whatever "
+               "`solver.iterations` (each iteration pulls `1 − (1 − stiffness)^(1 / iterations)`); `false`: per "
+               "iteration"),
       K("linear_blend", &ShapeDef::linear_blend, Range::closed(0, 1))
           .doc("β of the goal `β A + (1 − β) R`: 0 is the rigid goal, more lets the body shear and stretch "
                "(A: the best linear map, volume kept)"),
