@@ -585,38 +585,29 @@ void BM_ParticleContacts(benchmark::State& state) {
 struct ShapeBlock {
   Particles particles;
   kernels::ShapeClusters clusters;
-  std::vector<float> rest_x, rest_y, rest_z;
 };
 
 // Block n in lattice order (x fastest), the clusters its 4 x 4 x 4 sub-blocks.
 ShapeBlock make_shape_block(int n) {
-  ShapeBlock s{make_block(n, false), {}, {}, {}, {}};
-  const std::size_t count = s.particles.size();
-  s.rest_x.resize(count), s.rest_y.resize(count), s.rest_z.resize(count);
+  ShapeBlock s{make_block(n, false), {}};
   const int cells = n / 4;
-  s.clusters.start.push_back(0);
   for (int cz = 0; cz < cells; ++cz)
     for (int cy = 0; cy < cells; ++cy)
       for (int cx = 0; cx < cells; ++cx) {
-        const std::size_t first = s.clusters.particle.size();
+        std::vector<std::uint32_t> members;
         for (int k = 0; k < 4; ++k)
           for (int j = 0; j < 4; ++j)
             for (int i = 0; i < 4; ++i)
-              s.clusters.particle.push_back(std::uint32_t(((cz * 4 + k) * n + (cy * 4 + j)) * n + (cx * 4 + i)));
+              members.push_back(std::uint32_t(((cz * 4 + k) * n + (cy * 4 + j)) * n + (cx * 4 + i)));
         double c[3] = {0, 0, 0};
-        for (std::size_t m = first; m < s.clusters.particle.size(); ++m) {
-          const std::uint32_t q = s.clusters.particle[m];
-          c[0] += s.particles.x[q], c[1] += s.particles.y[q], c[2] += s.particles.z[q];
-        }
-        for (std::size_t m = first; m < s.clusters.particle.size(); ++m) {
-          const std::uint32_t q = s.clusters.particle[m];
-          s.rest_x[q] = float(s.particles.x[q] - c[0] / 64), s.rest_y[q] = float(s.particles.y[q] - c[1] / 64);
-          s.rest_z[q] = float(s.particles.z[q] - c[2] / 64);
-        }
-        s.clusters.start.push_back(std::uint32_t(s.clusters.particle.size()));
-        s.clusters.stiffness.push_back(1.0f);
-        s.clusters.rotation.push_back(kernels::kIdentityRotation);
+        for (const std::uint32_t q : members) c[0] += s.particles.x[q], c[1] += s.particles.y[q], c[2] += s.particles.z[q];
+        s.clusters.begin_cluster(1.0f);
+        for (const std::uint32_t q : members)
+          s.clusters.add_member(q, float(s.particles.x[q] - c[0] / 64), float(s.particles.y[q] - c[1] / 64),
+                                float(s.particles.z[q] - c[2] / 64));
+        s.clusters.end_cluster();
       }
+  s.clusters.finish();
   return s;
 }
 
@@ -625,8 +616,7 @@ void BM_ShapeMatching(benchmark::State& state) {
   const ShapeBlock& s = cached<make_shape_block>(int(state.range(0)));
   Particles p = s.particles;
   kernels::ShapeClusters clusters = s.clusters;
-  const kernels::RestOffsets rest{s.rest_x.data(), s.rest_y.data(), s.rest_z.data()};
-  time_calls_restoring(state, p, s.particles, [&] { kernels::solve_shape_matching(p.view(), rest, clusters); });
+  time_calls_restoring(state, p, s.particles, [&] { kernels::solve_shape_matching(p.view(), clusters); });
   state.counters["particles"] = double(clusters.particle.size());
   state.counters["clusters"] = double(clusters.clusters());
   report(state, double(clusters.particle.size()), "s_per_particle");

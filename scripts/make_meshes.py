@@ -4,6 +4,9 @@
 - cube.obj:       closed cube, side 1 m, centred at the origin, 6 quads wound outward.
 - icosphere.obj:  closed icosphere of radius 1 m (icosahedron subdivided twice: 162 vertices,
                   320 triangles), wound outward.
+- blob.obj:       a closed bunny-like blob about 1 m long (x), 0.95 m high (y): an icosphere
+                  (3 subdivisions: 642 vertices, 1280 triangles) pushed out radially into an
+                  ellipsoidal body, a head at the front (+x, up) and two ears on it, wound outward.
 - cloth_disc.obj: a disc of radius 0.5 m in the xz plane at y = 0 with an irregular
                   triangulation (8 jittered rings, 217 vertices, 384 triangles), normals +y,
                   with texture coordinates u = x + 0.5, v = z + 0.5.
@@ -100,6 +103,25 @@ def icosphere(levels):
     return v, faces
 
 
+def blob():
+    v, faces = icosphere(3)
+
+    def bump(p, centre, width):
+        c = [x / math.sqrt(dot(centre, centre)) for x in centre]
+        d = sub(p, c)
+        return math.exp(-dot(d, d) / (width * width))
+
+    out = []
+    for p in v:
+        r = (1.0 + 0.45 * bump(p, [0.7, 0.55, 0.0], 0.45)          # head
+             + 0.55 * bump(p, [0.25, 1.0, 0.18], 0.16)              # ears
+             + 0.55 * bump(p, [0.25, 1.0, -0.18], 0.16))
+        out.append([0.5 * r * p[0], 0.36 * r * p[1], 0.38 * r * p[2]])
+    # Radial pushes keep the sphere's topology and winding: still closed, normals outward.
+    check_closed(faces)
+    return out, faces
+
+
 def cloth_disc(rings=8, radius=0.5, seed=7):
     rng = random.Random(seed)
     # ring k has 6 k points (k >= 1) at angles offset by a random turn, jittered; interior rings
@@ -179,6 +201,8 @@ def main():
     write_obj(os.path.join(out, "cube.obj"), "closed cube, side 1 m, centred at the origin", v, f)
     v, f = icosphere(2)
     write_obj(os.path.join(out, "icosphere.obj"), "closed icosphere, radius 1 m, 2 subdivisions", v, f)
+    v, f = blob()
+    write_obj(os.path.join(out, "blob.obj"), "closed bunny-like blob, about 1 m long, head at +x", v, f)
     v, f, t = cloth_disc()
     write_obj(os.path.join(out, "cloth_disc.obj"),
               "cloth disc, radius 0.5 m, xz plane at y = 0, normals +y", v, f, t)

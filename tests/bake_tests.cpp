@@ -996,8 +996,8 @@ TEST(InputFingerprint, RecordedWithTheRecipeAndComparedOnResume) {
 }
 
 // The estimate's particle store is the store's bytes() once every pass has enabled its columns:
-// the same column table (built-in, fluid and vorticity scratch, shape rest offsets, 3 reorder
-// spares) times the same padded length, allocated once (Simulation reserves the count). It may
+// the same column table (built-in, fluid and vorticity scratch, 3 reorder spares) times the
+// same padded length, allocated once (Simulation reserves the count). It may
 // only be above: the 3 spares are allocated at the store's first reorder (the fluid's grid sort),
 // so a store that never reorders holds 13 of the estimate's 16 columns or more (at most 23 % over).
 TEST(MemoryEstimate, ParticleStoreIsTheStoresBytes) {

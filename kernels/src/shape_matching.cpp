@@ -1,5 +1,5 @@
 // Shape matching (shape_matching.hpp; Müller et al. 2005):
-//   c = sum m_i p_i / M,  A = sum m_i (p_i - c) q_i^T,  R = rot(A),  p_i += s (c + R q_i - p_i)
+//   c = sum m_i p_i / M,  A = sum m_i (p_i - c) q_i^T,  R = rot(A),  p_i += s (c + T q_i - p_i)
 // and the closest rotation by the iteration of Müller et al. 2016: with R's columns r_j and A's
 // columns a_j, the rotation that maximises tr(R^T A) makes sum_j r_j x a_j vanish, so
 //   omega = sum_j r_j x a_j / (|sum_j r_j . a_j| + eps),   R <- rotation by omega, R
@@ -7,26 +7,23 @@
 // 2 atan(|omega| / 2) instead of |omega|: the same fixed point, reached in a few more steps, and
 // only + - * / sqrt (correctly rounded everywhere), so every machine gets the same bits, as no
 // libm sin/cos is involved. Sums and the rotation are in double; the store stays float.
-//
-// Hand-written 3 x 3 and quaternion algebra instead of Eigen: the kernel layer does not depend
-// on Eigen, and whether a library picks a SIMD path for a 3 x 3 product would be one more thing
-// that could make the bits differ between builds.
+// The fit and the 3 x 3 algebra are in shape_fit.hpp.
 #include "seiche/kernels/shape_matching.hpp"
 
 #include <tbb/parallel_for.h>
 
 #include <cmath>
 
+#include "shape_fit.hpp"
+
 namespace seiche::kernels {
+
+namespace shape_detail {
 
 namespace {
 
 constexpr int kMaxRotationSteps = 64;
 constexpr double kStationary = 1e-9;  // |omega| below this (A scaled to unit norm): converged
-
-struct Quat {
-  double x, y, z, w;
-};
 
 Quat normalized(const Quat& q) {
   const double n = std::sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w);
@@ -42,15 +39,7 @@ Quat multiply(const Quat& a, const Quat& b) {
           a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z};
 }
 
-// The rotation matrix of a unit quaternion, row-major.
-void to_matrix(const Quat& q, double r[9]) {
-  const double xx = q.x * q.x, yy = q.y * q.y, zz = q.z * q.z;
-  const double xy = q.x * q.y, xz = q.x * q.z, yz = q.y * q.z;
-  const double wx = q.w * q.x, wy = q.w * q.y, wz = q.w * q.z;
-  r[0] = 1.0 - 2.0 * (yy + zz), r[1] = 2.0 * (xy - wz), r[2] = 2.0 * (xz + wy);
-  r[3] = 2.0 * (xy + wz), r[4] = 1.0 - 2.0 * (xx + zz), r[5] = 2.0 * (yz - wx);
-  r[6] = 2.0 * (xz - wy), r[7] = 2.0 * (yz + wx), r[8] = 1.0 - 2.0 * (xx + yy);
-}
+}  // namespace
 
 Quat closest_rotation_double(const double a_in[9], Quat q) {
   double norm2 = 0.0;
@@ -81,62 +70,111 @@ Quat closest_rotation_double(const double a_in[9], Quat q) {
   return q;
 }
 
-void match_cluster(const ParticleView& p, const RestOffsets& rest, ShapeClusters& s, std::size_t c) {
-  const std::uint32_t begin = s.start[c], end = s.start[c + 1];
-  double mass = 0.0, centre[3] = {0.0, 0.0, 0.0};
-  for (std::uint32_t k = begin; k < end; ++k) {
-    const std::uint32_t i = s.particle[k];
-    if (!(p.w[i] > 0.0f)) continue;  // pinned: weighs nothing here
-    const double m = 1.0 / double(p.w[i]);
-    mass += m;
-    centre[0] += m * p.px[i], centre[1] += m * p.py[i], centre[2] += m * p.pz[i];
-  }
-  if (!(mass > 0.0)) return;  // nothing movable
-  for (double& v : centre) v /= mass;
-  double a[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
-  for (std::uint32_t k = begin; k < end; ++k) {
-    const std::uint32_t i = s.particle[k];
-    if (!(p.w[i] > 0.0f)) continue;
-    const double m = 1.0 / double(p.w[i]);
-    const double d[3] = {m * (p.px[i] - centre[0]), m * (p.py[i] - centre[1]), m * (p.pz[i] - centre[2])};
-    const double q[3] = {rest.x[i], rest.y[i], rest.z[i]};
-    for (int row = 0; row < 3; ++row)
-      for (int col = 0; col < 3; ++col) a[3 * row + col] += d[row] * q[col];
-  }
-  const Quaternion& guess = s.rotation[c];
-  const Quat rot = closest_rotation_double(a, {guess[0], guess[1], guess[2], guess[3]});
+}  // namespace shape_detail
+
+namespace {
+
+using namespace shape_detail;
+
+// Cluster c's goals: moved to directly, or written to the goal scratch of an overlapping cluster.
+void match_cluster(const ParticleView& p, ShapeClusters& s, std::size_t c) {
+  const float beta = s.linear_blend[c];
+  ClusterFit fit;
+  if (!fit_cluster(p, s, c, beta > 0.0f, fit)) return;  // nothing movable
+  const Quat rot = closest_rotation_double(fit.apq, to_quat(s.rotation[c]));
   s.rotation[c] = {float(rot.x), float(rot.y), float(rot.z), float(rot.w)};
-  double r[9];
-  to_matrix(rot, r);
+  double t[9];
+  to_matrix(rot, t);
+  double linear[9];
+  if (beta > 0.0f && linear_map(fit, linear))
+    for (int k = 0; k < 9; ++k) t[k] = double(beta) * linear[k] + (1.0 - double(beta)) * t[k];
+  const double* centre = fit.centre;
+  const bool overlapping = s.overlapping[c] != 0;
   const double stiffness = s.stiffness[c];
-  for (std::uint32_t k = begin; k < end; ++k) {
-    const std::uint32_t i = s.particle[k];
-    if (!(p.w[i] > 0.0f)) continue;
-    const double q[3] = {rest.x[i], rest.y[i], rest.z[i]};
-    float* pos[3] = {&p.px[i], &p.py[i], &p.pz[i]};
-    for (int row = 0; row < 3; ++row) {
-      const double goal = centre[row] + r[3 * row] * q[0] + r[3 * row + 1] * q[1] + r[3 * row + 2] * q[2];
-      *pos[row] = float(*pos[row] + stiffness * (goal - *pos[row]));
+  const RestShape rest(s, c);
+  const std::uint32_t* particle = s.particle.data();
+  const float* w = p.w;
+  float *px = p.px, *py = p.py, *pz = p.pz;
+  for (std::uint32_t k = s.start[c], end = s.start[c + 1]; k < end; ++k) {
+    const std::uint32_t i = particle[k];
+    if (!(w[i] > 0.0f)) continue;
+    double q[3];
+    rest.offset(k, q);
+    double goal[3];
+    for (int row = 0; row < 3; ++row)
+      goal[row] = centre[row] + t[3 * row] * q[0] + t[3 * row + 1] * q[1] + t[3 * row + 2] * q[2];
+    if (overlapping) {
+      s.goal_x[k] = goal[0], s.goal_y[k] = goal[1], s.goal_z[k] = goal[2];
+      continue;
     }
+    float* pos[3] = {&px[i], &py[i], &pz[i]};
+    for (int row = 0; row < 3; ++row) *pos[row] = float(*pos[row] + stiffness * (goal[row] - *pos[row]));
   }
+}
+
+// A particle of overlapping clusters moves toward the mean of its clusters' goals.
+void move_shared_particle(const ParticleView& p, const ShapeClusters& s, std::size_t j) {
+  const std::uint32_t i = s.shared_particle[j];
+  const std::uint32_t begin = s.shared_start[j], end = s.shared_start[j + 1];
+  if (!(p.w[i] > 0.0f) || begin == end) return;
+  double sum[3] = {0.0, 0.0, 0.0};
+  for (std::uint32_t m = begin; m < end; ++m) {
+    const std::uint32_t k = s.shared_member[m];
+    sum[0] += s.goal_x[k], sum[1] += s.goal_y[k], sum[2] += s.goal_z[k];
+  }
+  const double count = double(end - begin), stiffness = s.shared_stiffness[j];
+  float* pos[3] = {&p.px[i], &p.py[i], &p.pz[i]};
+  for (int row = 0; row < 3; ++row) *pos[row] = float(*pos[row] + stiffness * (sum[row] / count - *pos[row]));
 }
 
 }  // namespace
 
+void ShapeClusters::begin_cluster(float cluster_stiffness) {
+  if (start.empty()) start.push_back(0);
+  stiffness.push_back(cluster_stiffness);
+  linear_blend.push_back(0.0f);
+  overlapping.push_back(0);
+  plasticity.push_back({});
+  rotation.push_back(kIdentityRotation);
+  plastic.push_back(kIdentityMatrix);
+}
+
+void ShapeClusters::add_member(std::uint32_t store_index, float qx, float qy, float qz, float mass_share) {
+  particle.push_back(store_index);
+  rest_x.push_back(qx), rest_y.push_back(qy), rest_z.push_back(qz);
+  share.push_back(mass_share);
+}
+
+void ShapeClusters::end_cluster() { start.push_back(std::uint32_t(particle.size())); }
+
+void ShapeClusters::finish() {
+  if (start.empty()) start.push_back(0);
+  if (shared_start.empty()) shared_start.push_back(0);
+  bool any_overlapping = false;
+  for (std::uint8_t o : overlapping) any_overlapping = any_overlapping || o != 0;
+  const std::size_t scratch = any_overlapping ? members() : 0;
+  goal_x.assign(scratch, 0.0), goal_y.assign(scratch, 0.0), goal_z.assign(scratch, 0.0);
+}
+
 void ShapeClusters::remap(std::span<const std::uint32_t> new_index) {
   for (std::uint32_t& k : particle) k = new_index[k];
+  for (std::uint32_t& k : shared_particle) k = new_index[k];
 }
 
 Quaternion closest_rotation(const double a[9], Quaternion guess) {
-  const Quat q = closest_rotation_double(a, {guess[0], guess[1], guess[2], guess[3]});
+  const Quat q = closest_rotation_double(a, to_quat(guess));
   return {float(q.x), float(q.y), float(q.z), float(q.w)};
 }
 
-void solve_shape_matching(const ParticleView& p, const RestOffsets& rest, ShapeClusters& clusters) {
+void solve_shape_matching(const ParticleView& p, ShapeClusters& clusters) {
   // One cluster per task: its sums run in member order on one thread, so the result does not
-  // depend on the thread count.
+  // depend on the thread count. Overlapping clusters only write their members' goals here.
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, clusters.clusters(), 1), [&](const auto& r) {
-    for (std::size_t c = r.begin(); c != r.end(); ++c) match_cluster(p, rest, clusters, c);
+    for (std::size_t c = r.begin(); c != r.end(); ++c) match_cluster(p, clusters, c);
+  });
+  if (clusters.shared_particle.empty()) return;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, clusters.shared_particle.size(), 256), [&](const auto& r) {
+    for (std::size_t j = r.begin(); j != r.end(); ++j) move_shared_particle(p, clusters, j);
   });
 }
 

@@ -1,5 +1,5 @@
-// The input files of a scene (every cloth's and mesh collider's OBJ) and their fingerprints: the
-// size and FNV-1a 64 hash of the bytes the scene loader read, so that what is recorded is what the
+// The input files of a scene (every cloth's, mesh collider's and mesh shape's OBJ) and their
+// fingerprints: the size and FNV-1a 64 hash of the bytes the scene loader read, so that what is recorded is what the
 // simulation used. A bake records them in bake.json (bake.hpp); a resume compares the files as
 // the loader reads them again with the record and refuses a missing or changed one, naming it,
 // unless the user accepts the change (`seiche bake --resume DIR --accept-changed-inputs`).
@@ -24,7 +24,7 @@ struct InputFile {
   bool operator==(const InputFile&) const = default;
 };
 
-/// The input files of a loaded scene, in scene order (cloths, then colliders), with the
+/// The input files of a loaded scene, in scene order (cloths, colliders, then shapes), with the
 /// fingerprints of the bytes the loader read. A definition made in code without a loaded mesh
 /// has its file read and hashed here.
 std::vector<InputFile> scene_input_files(const SceneDef& scene);

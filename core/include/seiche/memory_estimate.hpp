@@ -8,8 +8,8 @@
 // The estimate, per item of the scene (the figures are bounds or were measured; see
 // docs/design.md, "Memory"):
 //   particle store   every particle: the store's columns (ParticleStore: 13 built-in, the fluid's
-//                    2 and vorticity's 3 scratch columns, 3 per shape particle) and the 3 reorder
-//                    spares, 4 bytes each, padded like AlignedColumn; plus a frame's export buffer
+//                    2 and vorticity's 3 scratch columns) and the 3 reorder spares, 4 bytes
+//                    each, padded like AlignedColumn; plus a frame's export buffer
 //                    (kExportBytesPerParticle, the PLY's 28 bytes rounded up, and
 //                    kVtpExportBytesPerParticle, the .vtp's 36, for the formats the scene writes)
 //   fluid            neighbor lists at a bound of twice the rest lattice's neighbor count,
@@ -19,6 +19,8 @@
 //                    simulated, topology, constraints, colors, forests, output), plus
 //                    kSelfContactBytesPerVertex with self_collision: measured on 512^2 and 1024^2
 //                    sheets, which they bound from above by about 10 %
+//   shapes           20 bytes per cluster member (index, rest offset, mass share), one per particle;
+//                    48 per member of region clusters, (2 + 1/h)^3 per particle at half-width h
 //   mesh colliders   the signed distance field, 8 bytes per sample (at most 2^26 samples)
 //   process          kProcessBytes (code, libraries, thread pools)
 #pragma once

@@ -18,6 +18,7 @@ using Vec3 = std::array<float, 3>;
 
 struct ClothMesh;      // core/src/families/cloth/cloth_mesh.hpp
 struct ClothTopology;  // core/src/families/cloth/cloth_mesh.hpp
+struct ShapeSites;     // core/src/families/shape/shape_sites.hpp
 
 /// "solver": time stepping and the fluid solver's numerical settings.
 struct SolverDef {
@@ -77,16 +78,6 @@ struct FluidDef {
   float viscosity = 0.01f;        ///< XSPH viscosity coefficient c, dimensionless in [0, 1]; 0 = off
   float vorticity = 0.0f;         ///< vorticity confinement strength epsilon (m/s, >= 0); 0 = off
   Vec3 velocity{0.0f, 0.0f, 0.0f};  ///< m/s, initial velocity of every particle of the block
-};
-
-/// One entry of "shapes": a box filled with particles on a lattice (the sites of a fluid block),
-/// kept in its rest shape by shape matching: one cluster per entry, rigid at stiffness 1.
-struct ShapeDef {
-  BoxDef box;                       ///< required; 1 to 1 000 000 particles, inside the domain
-  float spacing = 0.05f;            ///< m (> 0); each particle's collision radius is half of it
-  float density = 1000.0f;          ///< kg/m^3 in (0, 1e5]: each particle weighs density spacing^3 (>= 1e-12 kg)
-  float stiffness = 1.0f;           ///< in (0, 1]: 1 is rigid, less pulls part way each iteration
-  Vec3 velocity{0.0f, 0.0f, 0.0f};  ///< m/s, initial velocity of every particle
 };
 
 /// One entry of "rigid_bodies": a rigid body with its own state (position, orientation, linear
@@ -175,6 +166,33 @@ struct ClothMeshDef {
   std::string file;                  ///< required; relative paths are relative to the scene file
   Vec3 translate{0.0f, 0.0f, 0.0f};  ///< m
   float scale = 1.0f;                ///< > 0
+};
+
+/// One entry of "shapes": a body of particles on a cubic lattice (a box filled as a fluid block
+/// is, a sphere, or a closed OBJ mesh voxelized at the spacing), kept in its rest shape by shape
+/// matching: one cluster per body, or overlapping region clusters (cluster_half_width > 0);
+/// rigid at stiffness 1, soft below, linear with linear_blend, plastic with creep.
+struct ShapeDef {
+  enum class Kind { Box, Sphere, Mesh };
+  Kind kind = Kind::Box;            ///< which of "box", "sphere", "mesh" the entry has (exactly one)
+  BoxDef box;                       ///< box: sites at (i + 0.5) spacing from box.min
+  Vec3 center{0.0f, 0.0f, 0.0f};    ///< sphere: centre (m); sites at center + i spacing
+  float radius = 0.0f;              ///< sphere: radius (m, > 0, required)
+  ClothMeshDef mesh;                ///< mesh: a closed OBJ; sites at its field's samples inside it
+  float spacing = 0.05f;            ///< m (> 0); each particle's collision radius is half of it
+  float density = 1000.0f;          ///< kg/m^3 in (0, 1e5]: each particle weighs density spacing^3 (>= 1e-12 kg)
+  float stiffness = 1.0f;           ///< in (0, 1]: 1 is rigid, less pulls part way each iteration
+  bool stiffness_per_substep = false;  ///< stiffness is what a substep removes, at any iteration count
+  float linear_blend = 0.0f;        ///< in [0, 1]: beta of the goal beta A + (1 - beta) R
+  float yield = 0.0f;               ///< >= 0: ||S - I||_F above which the rest shape flows
+  float creep = 0.0f;               ///< 1/s (>= 0): rate of plastic flow; 0 is elastic
+  float max_plastic_strain = 1.0f;  ///< > 0: bound on ||Sp - I||_F
+  int cluster_half_width = 0;       ///< lattice cells (>= 0); 0: the body is one cluster
+  Vec3 velocity{0.0f, 0.0f, 0.0f};  ///< m/s, initial velocity of every particle
+  /// Not a key: a mesh shape's lattice sites as the loader voxelized them (reading the OBJ once),
+  /// so that the family does not read the file again. Null for a box, a sphere, or a definition
+  /// made in code (the family then voxelizes the file).
+  std::shared_ptr<const ShapeSites> loaded_sites;
 };
 
 /// One entry of "cloths": exactly one of "sheet" and "mesh", plus the material.

@@ -60,6 +60,7 @@ inline constexpr int kJoints = 50;           //   rigid bodies only (no particle
 inline constexpr int kCollisions = 100;      //   last: nothing is pushed into a collider after it
 inline constexpr int kUpdate = 0;            // Update
 inline constexpr int kBodyUpdate = 10;
+inline constexpr int kShapePlasticity = 20;   //   on the positions the substep ends with
 inline constexpr int kDamping = 0;           // Velocity
 inline constexpr int kVorticity = 10;
 inline constexpr int kViscosity = 20;

@@ -11,6 +11,7 @@
 #include <system_error>
 
 #include "../families/cloth/cloth_mesh.hpp"
+#include "../families/shape/shape_sites.hpp"
 #include "seiche/checkpoint.hpp"
 
 namespace seiche {
@@ -19,7 +20,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
-InputFile fingerprint(std::string json_path, const std::string& file, const ClothMesh* loaded) {
+// The file as the loader read it (its size and hash, where `loaded` holds them), else read now.
+template <class Loaded>
+InputFile fingerprint(std::string json_path, const std::string& file, const Loaded* loaded) {
   InputFile in{std::move(json_path), file, 0, 0};
   if (loaded) {
     in.bytes = loaded->source_bytes;
@@ -50,6 +53,11 @@ std::vector<InputFile> scene_input_files(const SceneDef& scene) {
     const ColliderDef& c = scene.colliders[k];
     if (c.shape == ColliderDef::Shape::Mesh)
       files.push_back(fingerprint(fmt::format("colliders[{}].mesh.file", k), c.mesh.file, c.loaded_mesh.get()));
+  }
+  for (std::size_t k = 0; k < scene.shapes.size(); ++k) {
+    const ShapeDef& s = scene.shapes[k];
+    if (s.kind == ShapeDef::Kind::Mesh)
+      files.push_back(fingerprint(fmt::format("shapes[{}].mesh.file", k), s.mesh.file, s.loaded_sites.get()));
   }
   return files;
 }

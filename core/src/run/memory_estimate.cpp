@@ -12,6 +12,7 @@
 
 #include "../families/cloth/cloth_mesh.hpp"
 #include "../families/lattice.hpp"
+#include "../families/shape/shape_sites.hpp"
 #include "seiche/aligned_column.hpp"
 #include "seiche/scene_loader.hpp"
 
@@ -23,7 +24,10 @@ constexpr std::uint64_t kBuiltInColumns = 13;  // x y z px py pz vx vy vz w phas
 constexpr std::uint64_t kReorderSpares = 3;    // one per element type
 constexpr std::uint64_t kFluidColumns = 2;     // density, lambda
 constexpr std::uint64_t kVorticityColumns = 3; // omega_x omega_y omega_z
-constexpr std::uint64_t kShapeColumns = 3;     // shape.rest_x, _y, _z
+// A shape's cluster member: its store index, rest offset and mass share; a member of overlapping
+// region clusters also its goal (3 doubles) and its entry in its particle's list.
+constexpr std::uint64_t kShapeBytesPerMember = 20;
+constexpr std::uint64_t kRegionBytesPerMember = 48;
 constexpr std::uint64_t kGridBytesPerParticle = 13;  // cell key, sorted order, in_grid flag, offset
 constexpr std::uint64_t kMaxGridCells = std::uint64_t(1) << 24;  // neighbor::make_grid_spec's cap
 constexpr std::uint64_t kMaxSdfSamples = std::uint64_t(1) << 26; // build_mesh_sdf's cap
@@ -80,7 +84,7 @@ std::string MemoryEstimate::describe() const {
 std::size_t scene_particle_count(const SceneDef& scene) {
   std::size_t n = scene.particles.size();
   for (const FluidDef& f : scene.fluids) n += lattice_size(f.box, f.spacing);
-  for (const ShapeDef& s : scene.shapes) n += lattice_size(s.box, s.spacing);
+  for (const ShapeDef& s : scene.shapes) n += shape_site_count(s);
   for (const ClothDef& c : scene.cloths) n += cloth_vertices_and_triangles(c).first;
   return n;
 }
@@ -94,7 +98,6 @@ MemoryEstimate estimate_scene_memory(const SceneDef& scene) {
 
   std::uint64_t columns = kBuiltInColumns + kReorderSpares;
   if (!scene.fluids.empty()) columns += kFluidColumns + (vorticity ? kVorticityColumns : 0);
-  if (!scene.shapes.empty()) columns += kShapeColumns;
   e.particle_store = columns * column_bytes(n);
   // A frame's particle files, encoded together (particle_files.hpp).
   const std::uint64_t export_bytes = (scene.output.particles_ply ? kExportBytesPerParticle : 0) +
@@ -122,6 +125,17 @@ MemoryEstimate estimate_scene_memory(const SceneDef& scene) {
                                 triangles * kClothBytesPerTriangle;
     e.items.push_back({fmt::format("cloths[{}].{}", k, c.sheet ? "sheet.resolution" : "mesh.file"),
                        fmt::format("cloths[{}] ({} vertices, {} triangles)", k, vertices, triangles), bytes});
+  }
+  for (std::size_t k = 0; k < scene.shapes.size(); ++k) {
+    const ShapeDef& s = scene.shapes[k];
+    const bool regions = s.cluster_half_width > 0;
+    // A particle is in one cluster, or in (2 + 1/h)^3 region clusters of half-width h on average
+    // inside the body.
+    const double per_particle = regions ? std::pow(2.0 + 1.0 / s.cluster_half_width, 3.0) : 1.0;
+    const double members = double(shape_site_count(s)) * per_particle;
+    e.items.push_back({fmt::format("shapes[{}].{}", k, regions ? "cluster_half_width" : "spacing"),
+                       fmt::format("shapes[{}] ({:.0f} cluster members)", k, members),
+                       std::uint64_t(members * double(regions ? kRegionBytesPerMember : kShapeBytesPerMember))});
   }
   for (std::size_t k = 0; k < scene.colliders.size(); ++k) {
     const std::uint64_t samples = sdf_samples(scene.colliders[k]);

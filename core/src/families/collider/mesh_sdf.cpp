@@ -236,7 +236,7 @@ void build_mesh_sdf(const ClothMesh& mesh, float voxel, float band, const std::s
     }
     if (open > 0) {
       throw SceneError(file, json_path,
-                       fmt::format("a mesh collider must be closed (every edge shared by exactly "
+                       fmt::format("the mesh must be closed (every edge shared by exactly "
                                    "two triangles): the edge between vertices {} and {} (1-based) "
                                    "belongs to {} triangle{}; {} such edge{}",
                                    (first_open >> 32) + 1, (first_open & 0xffffffffu) + 1,

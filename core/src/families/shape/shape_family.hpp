@@ -1,17 +1,22 @@
-// Rigid and soft particle clusters kept in shape by shape matching (kernels/shape_matching.hpp;
-// Müller et al. 2005). Scene section "shapes": each entry a box filled with particles on a
-// lattice, one cluster; stiffness 1 is rigid, less is soft (a linear pull toward the rigid goal
-// every iteration).
+// Rigid, soft, linear and plastic particle bodies kept in shape by shape matching
+// (kernels/shape_matching.hpp, shape_plasticity.hpp; Müller et al. 2005). Scene section "shapes":
+// each entry a body of particles on a lattice (a box, a sphere, a voxelized closed OBJ mesh,
+// shape_sites.hpp), one cluster, or overlapping region clusters (cluster_half_width k: cubes of
+// half-width k cells centred at every k-th cell, so a particle is in 8 to 27 of them).
 //
 // What the family holds and where:
-//   store columns   shape.rest_x/y/z (Constant): each particle's rest offset from its cluster's
-//                   rest centre of mass; the store moves them with the particles on a reorder
-//   clusters        member lists (store indices, remapped after a reorder) and stiffness
-//   state           every cluster's rotation of the last solve: the warm start of the next one,
-//                   carried across substeps and saved in checkpoints as chunk "shape.rotations"
-// Pass: "shape matching" every iteration (pass_order::kShapeMatching), before the collisions.
-// Error row "shape_error": each particle's distance from its cluster's rigid fit on the final
-// positions, in units of the cluster's spacing.
+//   clusters        member lists (store indices, remapped after a reorder), each member's rest
+//                   offset from its cluster's rest centre of mass (rebuilt from the scene on a
+//                   resume), the clusters' settings, and the lists of shared particles
+//   state           every cluster's rotation of the last solve (the warm start of the next one)
+//                   and, for plastic bodies, its plastic deformation Sp of the rest shape: both
+//                   carried across substeps and saved in checkpoints as chunks "shape.rotations"
+//                   and "shape.plastic" (the latter only where a body is plastic)
+// Passes: "shape matching" every iteration (pass_order::kShapeMatching), before the collisions;
+// "shape plasticity" once per substep after the update (pass_order::kShapePlasticity), where a
+// body is plastic.
+// Error row "shape_error": each member's distance from its cluster's rigid fit (of its rest
+// shape, plastic deformation included) on the final positions, in units of the body's spacing.
 #pragma once
 
 #include <cstddef>
@@ -24,13 +29,14 @@
 
 namespace seiche {
 
+struct ShapeSites;
+
 class ShapeFamily final : public Family {
  public:
   /// Particles of all the scene's shapes.
   static std::size_t particle_count(const SceneDef& scene);
 
-  /// Writes the shapes' particles at store indices [first, first + particle_count(scene)) and
-  /// adds the family's columns to the store.
+  /// Writes the shapes' particles at store indices [first, first + particle_count(scene)).
   ShapeFamily(const SceneDef& scene, ParticleStore& store, std::size_t first);
 
   void add_passes(std::vector<Pass>& passes) override;
@@ -40,12 +46,13 @@ class ShapeFamily final : public Family {
   void restore_state(const CheckpointChunks& chunks) override;
 
  private:
-  kernels::RestOffsets rest() const { return {rest_x_.data(), rest_y_.data(), rest_z_.data()}; }
+  void add_one_cluster(const ShapeDef& s, std::size_t begin, std::size_t end);
+  void add_region_clusters(const ShapeDef& s, const ShapeSites& sites, std::size_t begin);
 
   ParticleStore& store_;
-  FloatColumn &rest_x_, &rest_y_, &rest_z_;
   kernels::ShapeClusters clusters_;
   std::vector<float> spacing_;  // per cluster: the unit of its error row
+  bool plastic_ = false;        // a body flows: the plasticity pass and chunk
 };
 
 }  // namespace seiche
