@@ -2,6 +2,8 @@
 the run report."""
 
 import gc
+import threading
+import time
 import json
 
 import numpy as np
@@ -109,3 +111,39 @@ def test_report_has_the_settings_and_a_row_per_frame(small_fluid):
     assert 0.0 <= last["fluid_density_error"]["mean"] < 0.1
     assert last["kinetic_energy"] > 0.0  # the column has started to fall
     assert set(sim.pipeline) <= set(last["pass_ms"])  # every pass is timed
+
+
+def test_step_releases_the_gil(small_fluid):
+    # A Python thread counts while the main thread sleeps, then while it steps one long frame: with
+    # the GIL released the count goes on at a good part of its rate (measured: about 60 %); held, the
+    # thread only runs when the interpreter forces a switch (about 3 %).
+    scene, overrides = small_fluid
+    probe = seiche.Simulation(scene, set=overrides, threads=1)
+    start = time.perf_counter()
+    probe.step()
+    substeps = probe.report()["settings"]["substeps"]
+    scale = max(1, min(40, int(0.3 / max(time.perf_counter() - start, 1e-3))))  # a frame of about 0.3 s
+    sim = seiche.Simulation(scene, set=overrides + [f"solver.substeps={substeps * scale}"], threads=1)
+
+    stop = threading.Event()
+    stamps = []
+
+    def count():
+        while not stop.is_set():
+            stamps.append(time.perf_counter())
+
+    counter = threading.Thread(target=count)
+    counter.start()
+    begin_sleep = time.perf_counter()
+    time.sleep(0.1)
+    begin_step = time.perf_counter()
+    sim.step()
+    end_step = time.perf_counter()
+    stop.set()
+    counter.join()
+    assert sim.frame == 1
+
+    def rate(a, b):
+        return sum(1 for s in stamps if a <= s < b) / (b - a)
+
+    assert rate(begin_step, end_step) > 0.25 * rate(begin_sleep, begin_step)
