@@ -122,6 +122,11 @@ valid until the next step(); the store is reordered every substep, so match part
       .def_property_readonly("time", [](const PySimulation& s) { return s.simulation().time(); }, "Simulated time (s).")
       .def_property_readonly("particle_count", [](const PySimulation& s) { return s.simulation().particles().size(); })
       .def("__len__", [](const PySimulation& s) { return s.simulation().particles().size(); })
+      .def("__repr__",
+           [](const PySimulation& s) {
+             return fmt::format("<seiche.Simulation {}: {} particles, frame {}, t = {:g} s>", s.simulation().scene().name,
+                                s.simulation().particles().size(), s.simulation().frame(), s.simulation().time());
+           })
       .def_property_readonly("scene_name", [](const PySimulation& s) { return s.simulation().scene().name; })
       .def_property_readonly("pipeline", [](const PySimulation& s) { return s.simulation().pipeline(); },
                              "The passes of a substep, in order.")

@@ -22,6 +22,7 @@ def test_seed_worked_example_gives_the_lecture_answer():
     sim = seiche.Simulation(scene_path("seed_example.json"))
     assert sim.pipeline == ["predict", "distance", "collisions", "update"]
     sim.step()
+    assert repr(sim) == "<seiche.Simulation seed_example: 2 particles, frame 1, t = 0.0166667 s>"
     order = np.argsort(sim.ids)
     got = np.stack(sim.positions, axis=1)[order].astype(np.float64)
     exact = np.array([[14 / 3, 19 / 6, 7 / 3], [8 / 3, 25 / 6, 13 / 3]])
