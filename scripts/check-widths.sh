@@ -20,9 +20,9 @@ widths=("$@")
 [ ${#widths[@]} -gt 0 ] || widths=(x86-64 x86-64-v3 x86-64-v4 aarch64)
 jobs=${JOBS:-$(nproc)}
 targets=(seiche_kernels seiche_neighbor)
-# Configure only what the two targets need: no tests, benchmarks or OpenVDB.
+# Configure only what the two targets need: no tests, benchmarks, OpenVDB or Python module.
 common=(-G Ninja -DCMAKE_BUILD_TYPE=Release -DSEICHE_WERROR=ON -DSEICHE_BUILD_TESTS=OFF
-        -DSEICHE_BUILD_BENCHMARKS=OFF -DSEICHE_WITH_OPENVDB=OFF)
+        -DSEICHE_BUILD_BENCHMARKS=OFF -DSEICHE_WITH_OPENVDB=OFF -DSEICHE_BUILD_PYTHON=OFF)
 
 # Shows why a width failed: the configure log, or ninja's report from its first failed compile
 # (a template error in xsimd can run to thousands of lines; the whole log stays on disk).

@@ -11,8 +11,10 @@ packages=(
   libgtest-dev libbenchmark-dev
   libopenvdb-dev libboost-iostreams-dev libblosc-dev
   python3 python3-matplotlib
+  pybind11-dev python3-dev      # the Python module (python/), built by the normal build
+  python3-numpy python3-pytest  # its tests (make test runs pytest through ctest)
   "$@"  # more, for other uses (install-ci-deps.sh: the AArch64 cross compiler, clang; make fuzz: clang;
-        # make test: blender and python3-numpy, for the Blender add-on's test)
+        # make test: blender, for the Blender add-on's test)
 )
 
 missing=()

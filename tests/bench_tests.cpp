@@ -156,6 +156,10 @@ TEST(BenchSweep, SweepKeysAndValuesAreParsedAndCheckedBeforeAnythingRuns) {
   EXPECT_THROW(parse_sweep("substeps"), BenchError);
   EXPECT_THROW(parse_sweep("=1,2"), BenchError);
   EXPECT_THROW(parse_sweep("substeps=1,,2"), BenchError);
+  EXPECT_EQ(parse_reference_kind("auto"), ReferenceKind::Auto);
+  EXPECT_EQ(parse_reference_kind("xpbd"), ReferenceKind::Xpbd);
+  EXPECT_EQ(parse_reference_kind("implicit"), ReferenceKind::ImplicitEuler);
+  EXPECT_THROW(parse_reference_kind("Implicit"), BenchError);
 
   BenchOptions o;
   o.frames = 1;

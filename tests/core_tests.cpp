@@ -333,6 +333,7 @@ TEST(Runner, WritesPlyInIdOrderAndAReport) {
     EXPECT_EQ(e.path().extension() == ".tmp", false) << "left a temporary file: " << e.path();
 
   const nlohmann::json rep = nlohmann::json::parse(read_file(dir / "report.json"));
+  EXPECT_EQ(r.report, read_file(dir / "report.json"));  // the result carries the report written
   EXPECT_EQ(rep["status"], "ok");
   EXPECT_EQ(rep["settings"]["particles"], r.particles);
   ASSERT_EQ(rep["frames"].size(), 3u);

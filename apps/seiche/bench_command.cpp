@@ -62,13 +62,6 @@ bool draw_plot(const std::filesystem::path& csv, const std::filesystem::path& pn
   return true;
 }
 
-seiche::ReferenceKind reference_kind(const std::string& name) {
-  if (name == "auto") return seiche::ReferenceKind::Auto;
-  if (name == "xpbd") return seiche::ReferenceKind::Xpbd;
-  if (name == "implicit") return seiche::ReferenceKind::ImplicitEuler;
-  throw seiche::BenchError(fmt::format("--reference: expected auto, xpbd or implicit, got \"{}\"", name));
-}
-
 int stability_command(const BenchArgs& a) {
   if (a.size != "full" && a.size != "reduced")
     throw seiche::BenchError(fmt::format("--size: expected full or reduced, got \"{}\"", a.size));
@@ -99,7 +92,7 @@ int bench_command(const BenchArgs& a) {
   for (const std::string& s : a.sweeps) o.sweep.push_back(seiche::parse_sweep(s));
   o.frames = a.frames;
   o.threads = a.threads;
-  o.reference = reference_kind(a.reference);
+  o.reference = seiche::parse_reference_kind(a.reference);
   o.reference_substeps = a.reference_substeps;
   o.reference_iterations = a.reference_iterations;
   o.progress = &std::cerr;

@@ -30,15 +30,13 @@
 #include "bench_command.hpp"
 #include "seiche/bake.hpp"
 #include "seiche/bench.hpp"
+#include "seiche/export/scene_exporters.hpp"
 #include "seiche/input_fingerprint.hpp"
 #include "seiche/kernels/simd_info.hpp"
 #include "seiche/memory_estimate.hpp"
 #include "seiche/output_files.hpp"
 #include "seiche/runner.hpp"
 #include "seiche/scene_loader.hpp"
-#ifdef SEICHE_HAS_OPENVDB
-#include "seiche/export/vdb_exporter.hpp"
-#endif
 
 namespace {
 
@@ -71,7 +69,7 @@ std::optional<std::string> unknown_subcommand(CLI::App& app, int argc, char** ar
   return fmt::format("unknown subcommand '{}'; the subcommands are {}", word, fmt::join(names, ", "));
 }
 
-/// Bad command-line input that is not a scene error (a frame range, a missing OpenVDB).
+/// Bad command-line input that is not a scene error (a frame range, a memory size).
 class UsageError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
@@ -205,41 +203,6 @@ std::pair<int, int> parse_frame_range(const std::string& text) {
   return {first, last};
 }
 
-// The exporters of the scene, besides the particle files the bake writes itself: the families' (every
-// cloth's OBJ, the rigid bodies' JSON lines), and the fluid's .vdb and mesh that the output section asks for. `source` is the
-// file the scene came from (the scene file, or bake.json on a resume), named by export errors.
-std::vector<std::unique_ptr<seiche::FrameExporter>> make_exporters(const seiche::SceneDef& scene, bool resuming,
-                                                                   const std::string& source) {
-  std::vector<std::unique_ptr<seiche::FrameExporter>> exporters = seiche::family_exporters(scene);
-  const seiche::OutputDef& o = scene.output;
-  if (!o.any_vdb() && !o.mesh) return exporters;
-  std::vector<std::string> asked;
-  for (auto [on, grid] : {std::pair{o.vdb_surface, "surface"}, {o.vdb_density, "density"}, {o.vdb_points, "points"},
-                          {o.vdb_velocity, "v"}})
-    if (on) asked.push_back(grid);
-  const std::string what = fmt::format("{}{}{}", asked.empty() ? "" : fmt::format("output.vdb = [{}]", fmt::join(asked, ", ")),
-                                       !asked.empty() && o.mesh ? " and " : "", o.mesh ? "output.mesh = true" : "");
-  if (scene.fluids.empty()) {
-    if (!scene.cloths.empty()) return exporters;  // the fluid's output keys do not concern cloths
-    std::cerr << fmt::format("seiche: warning: the scene asks for {} but has no fluid: writing particles only\n", what);
-    return exporters;
-  }
-#ifdef SEICHE_HAS_OPENVDB
-  try {
-    if (auto e = seiche::make_vdb_exporter(scene)) exporters.push_back(std::move(e));
-  } catch (const seiche::SceneError& e) {  // the exporter knows the scene, not its file
-    throw seiche::SceneError(source, e.json_path(), e.problem());
-  }
-#else
-  (void)source;
-  throw UsageError(fmt::format(
-      "the scene asks for {}, but this seiche was built without OpenVDB: rebuild with -DSEICHE_WITH_OPENVDB=ON{}",
-      what, resuming ? "" : ", or bake particles only with --set output.vdb=[] --set output.mesh=false"));
-#endif
-  (void)resuming;
-  return exporters;
-}
-
 std::string read_text(const std::string& file) {
   std::ifstream in(file, std::ios::binary);
   std::stringstream s;
@@ -279,8 +242,8 @@ int bake_command(const BakeArgs& a) {
     recipe.scene_dir = scene.base_dir;
     recipe.inputs = seiche::scene_input_files(scene);
   }
-  const auto exporters =
-      make_exporters(scene, resuming, resuming ? (dir / seiche::kBakeRecipeFile).string() : recipe.scene_source);
+  const auto exporters = seiche::scene_exporters(
+      scene, resuming ? (dir / seiche::kBakeRecipeFile).string() : recipe.scene_source, resuming, &std::cerr);
 
   seiche::BakeOptions o;
   o.out_dir = dir;
@@ -447,6 +410,9 @@ int main(int argc, char** argv) {
     std::cerr << "seiche: error: " << e.what() << "\n";
     return kExitBadInput;
   } catch (const UsageError& e) {
+    std::cerr << "seiche: error: " << e.what() << "\n";
+    return kExitBadInput;
+  } catch (const seiche::ExportUnavailableError& e) {
     std::cerr << "seiche: error: " << e.what() << "\n";
     return kExitBadInput;
   } catch (const seiche::IoError& e) {

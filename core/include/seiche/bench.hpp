@@ -49,6 +49,9 @@ SweepAxis parse_sweep(std::string_view text);
 
 enum class ReferenceKind { Auto, Xpbd, ImplicitEuler };
 
+/// "auto", "xpbd" or "implicit" (--reference); throws BenchError for anything else.
+ReferenceKind parse_reference_kind(std::string_view name);
+
 struct BenchOptions {
   std::vector<SweepAxis> sweep;   ///< empty: substeps 1,2,4,8,16 x iterations 1,2,4,8
   int frames = 0;                 ///< 0: the scene's output.frames

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <ostream>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "seiche/frame_metrics.hpp"
@@ -29,6 +30,7 @@ struct RunResult {
   double wall_seconds = 0.0;
   std::vector<FrameMetrics> metrics;  ///< one per frame
   PassTimer timer;
+  std::string report;  ///< the JSON run report (what RunOptions::report is written with)
 };
 
 /// The simulation produced NaN or inf. what() says in which frame and how many values.

@@ -254,6 +254,13 @@ LoadedSweep load_sweep(const SceneFactory& load_scene, const BenchOptions& optio
 
 }  // namespace
 
+ReferenceKind parse_reference_kind(std::string_view name) {
+  if (name == "auto") return ReferenceKind::Auto;
+  if (name == "xpbd") return ReferenceKind::Xpbd;
+  if (name == "implicit") return ReferenceKind::ImplicitEuler;
+  throw BenchError(fmt::format("--reference: expected auto, xpbd or implicit, got \"{}\"", name));
+}
+
 SweepAxis parse_sweep(std::string_view text) {
   const auto eq = text.find('=');
   if (eq == std::string_view::npos)

@@ -55,6 +55,8 @@ void RunReport::add_frame_output(double export_ms, std::uint64_t bytes) {
   f["bytes_written"] = bytes;
 }
 
+void RunReport::set_frames(int frames) { doc_["settings"]["frames"] = frames; }
+
 void RunReport::set_error(const std::string& message) {
   doc_["status"] = "error";
   doc_["error"] = message;

@@ -25,6 +25,9 @@ class RunReport {
   /// and the bytes written.
   void add_frame_output(double export_ms, std::uint64_t bytes);
   void set_error(const std::string& message);
+  /// settings.frames, for a report whose frames are stepped one call at a time (the Python API's
+  /// Simulation: the frames stepped so far).
+  void set_frames(int frames);
   std::string dump() const { return doc_.dump(2) + "\n"; }
 
  private:

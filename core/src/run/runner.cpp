@@ -122,6 +122,7 @@ RunResult run_on_threads(const SceneDef& scene, const RunOptions& options, int t
   }
   result.wall_seconds = std::chrono::duration<double>(Clock::now() - start).count();
   result.timer = sim.timer();
+  result.report = report.dump();
   write_report();
   if (options.summary) {
     print_run_summary(*options.summary, scene, result, pipeline);
