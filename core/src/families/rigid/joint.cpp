@@ -15,7 +15,7 @@ namespace {
 double hinge_angle_of(const Joint& j, const RigidBody& a, const RigidBody& b) {
   const Vec3d axis = rotate(a.q, j.axis_a);
   const Vec3d from = rotate(a.q, j.normal_a), to = rotate(b.q, j.normal_b);
-  return std::atan2(dot(cross(from, to), axis), dot(from, to));
+  return portable_atan2(dot(cross(from, to), axis), dot(from, to));
 }
 
 // The rotation vector that turns unit u onto unit v (zero when they are parallel).
@@ -23,7 +23,7 @@ Vec3d rotation_between(Vec3d u, Vec3d v) {
   const Vec3d c = cross(u, v);
   const double s = length(c);
   if (!(s > 0.0)) return {};
-  return (std::atan2(s, dot(u, v)) / s) * c;
+  return (portable_atan2(s, dot(u, v)) / s) * c;
 }
 
 // The positional error the joint corrects: P_b - P_a, less what its type allows.

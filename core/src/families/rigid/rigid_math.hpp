@@ -1,7 +1,8 @@
 // Double-precision 3-vectors and unit quaternions for the rigid bodies (rigid_body.hpp): the few
-// operations the integration and the joints need, written out (+ - * / sqrt, and std::sin, cos
-// and atan2 for the exponential and logarithm maps), serial and in a fixed order, so that the
-// bits depend on neither the thread count nor the order of anything but the scene.
+// operations the integration and the joints need, written out (+ - * / sqrt, and the sin, cos and
+// atan2 of portable_trig.hpp for the exponential and logarithm maps), serial and in a fixed order,
+// so that the bits depend on neither the thread count, nor the machine, nor the order of anything
+// but the scene.
 //
 // A quaternion q = [w, x, y, z] (w the scalar part) rotates a vector v by R(q) v = q [0, v] q*.
 // Rotation vectors: exp(phi) = [cos(|phi|/2), sin(|phi|/2) phi/|phi|] and its inverse log(q),
@@ -10,6 +11,8 @@
 #pragma once
 
 #include <cmath>
+
+#include "portable_trig.hpp"
 
 namespace seiche::rigid {
 
@@ -67,8 +70,9 @@ inline Vec3d rotate_back(Quatd q, Vec3d v) { return rotate(conjugate(q), v); }
 inline Quatd rotation_quaternion(Vec3d phi) {
   const double angle = length(phi);
   if (!(angle > 0.0)) return {};
-  const double s = std::sin(0.5 * angle) / angle;
-  return {std::cos(0.5 * angle), s * phi.x, s * phi.y, s * phi.z};
+  const SinCos half = portable_sin_cos(0.5 * angle);
+  const double s = half.sin / angle;
+  return {half.cos, s * phi.x, s * phi.y, s * phi.z};
 }
 
 /// log(q): the rotation vector of unit q, on the w >= 0 half (angle in [0, pi]).
@@ -76,7 +80,7 @@ inline Vec3d rotation_vector(Quatd q) {
   if (q.w < 0.0) q = {-q.w, -q.x, -q.y, -q.z};
   const double s = length(q.vec());
   if (!(s > 0.0)) return {};
-  const double angle = 2.0 * std::atan2(s, q.w);
+  const double angle = 2.0 * portable_atan2(s, q.w);
   return (angle / s) * q.vec();
 }
 
