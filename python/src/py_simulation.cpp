@@ -56,8 +56,9 @@ std::vector<std::string> PySimulation::write_frame(const std::filesystem::path& 
   const std::filesystem::path ply = dir / seiche::frame_file_name("particles", frame, "ply");
   seiche::write_file_atomically(ply, seiche::encode_particles_ply(sim_->particles()));
   written.push_back(ply.string());
+  const std::vector<seiche::BodyPose> bodies = sim_->body_poses();
   for (const auto& e : exporters_) {
-    e->write_frame({sim_->particles(), sim_->scene(), frame, sim_->time()}, dir);
+    e->write_frame({sim_->particles(), sim_->scene(), frame, sim_->time(), bodies}, dir);
     for (const std::filesystem::path& file : e->files(frame)) written.push_back((dir / file).string());
   }
   return written;
@@ -94,6 +95,28 @@ py::object json_loads(const std::string& text) { return py::module_::import("jso
 py::tuple column_triple(const py::object& self, const char* a, const char* b, const char* c) {
   const PySimulation& s = self.cast<const PySimulation&>();
   return py::make_tuple(s.column(a, self), s.column(b, self), s.column(c, self));
+}
+
+}  // namespace
+
+namespace {
+
+// The rigid bodies' poses by name (Simulation::body_poses is in the order of the scene's
+// rigid_bodies): small, so copied into Python tuples rather than viewed.
+py::dict body_states(const PySimulation& s) {
+  const std::vector<seiche::BodyPose> poses = s.simulation().body_poses();
+  const std::vector<seiche::RigidBodyDef>& defs = s.simulation().scene().rigid_bodies;
+  py::dict out;
+  for (std::size_t i = 0; i < poses.size() && i < defs.size(); ++i) {
+    const seiche::BodyPose& p = poses[i];
+    py::dict body;
+    body["position"] = py::make_tuple(p.position[0], p.position[1], p.position[2]);
+    body["orientation"] = py::make_tuple(p.orientation[0], p.orientation[1], p.orientation[2], p.orientation[3]);
+    body["velocity"] = py::make_tuple(p.velocity[0], p.velocity[1], p.velocity[2]);
+    body["angular_velocity"] = py::make_tuple(p.angular_velocity[0], p.angular_velocity[1], p.angular_velocity[2]);
+    out[py::str(defs[i].name)] = body;
+  }
+  return out;
 }
 
 }  // namespace
@@ -140,6 +163,11 @@ valid until the next step(); the store is reordered every substep, so match part
                              "(vx, vy, vz): three read-only float32 views (m/s).")
       .def_property_readonly("ids", [](const py::object& self) { return self.cast<const PySimulation&>().column("id", self); },
                              "Creation index of every particle (int32 view): the order of the PLY files.")
+      .def_property_readonly("bodies", &body_states,
+                             "The rigid bodies' state, a dict by body name in scene order, each a dict of tuples "
+                             "(copies, double precision): position (m, the centre of mass), orientation (unit "
+                             "quaternion [w, x, y, z], body to world), velocity (m/s), angular_velocity (rad/s, "
+                             "world frame). Empty without rigid bodies.")
       .def("report", [](const PySimulation& s) { return json_loads(s.report()); },
            "The run report of the frames stepped so far, as `seiche run --report` writes it.")
       .def("write_frame", &PySimulation::write_frame, py::arg("out"),

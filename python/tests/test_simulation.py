@@ -148,3 +148,21 @@ def test_step_releases_the_gil(small_fluid):
         return sum(1 for s in stamps if a <= s < b) / (b - a)
 
     assert rate(begin_step, end_step) > 0.25 * rate(begin_sleep, begin_step)
+
+
+def test_bodies_follow_the_bodies_file(tmp_path):
+    """The rigid bodies' state by name equals the bodies.%04d.jsonl the CLI writes (17 digits)."""
+    import json
+    sim = seiche.Simulation(scene_path("pendulums.json"))
+    sim.step(3)
+    bodies = sim.bodies
+    sim.write_frame(str(tmp_path))
+    lines = [json.loads(line) for line in open(tmp_path / "bodies.0003.jsonl")]
+    assert [b["name"] for b in lines] == list(bodies)
+    for line in lines:
+        got = bodies[line["name"]]
+        for key in ("position", "orientation", "velocity", "angular_velocity"):
+            assert list(got[key]) == line[key], key
+    q = next(iter(bodies.values()))["orientation"]
+    assert abs(sum(c * c for c in q) - 1.0) < 1e-12
+    assert seiche.Simulation(scene_path("dam_break.json"), set={"fluids[0].spacing": 0.1}).bodies == {}
