@@ -13,11 +13,13 @@
 #include <fstream>
 #include <iterator>
 #include <numbers>
+#include <sstream>
 #include <string>
 #include <vector>
 
 #include "families/rigid/body_mesh.hpp"
 #include "families/rigid/body_shape.hpp"
+#include "families/rigid/body_surface.hpp"
 #include "families/rigid/rigid_body.hpp"
 #include "families/rigid/rigid_family.hpp"
 #include "seiche/body_exporter.hpp"
@@ -706,5 +708,127 @@ TEST(MeshBody, MeshesWithoutASolidAreRefused) {
       EXPECT_NE(e.problem().find(c.problem), std::string::npos) << c.name << ": " << e.what();
     }
     fs::remove(obj);
+  }
+}
+
+// ---- Body meshes per frame: <body name>.%04d.obj -----------------------------------------------
+
+namespace {
+
+std::vector<Vec3d> obj_vertices(const std::string& text) {
+  std::vector<Vec3d> v;
+  std::istringstream in(text);
+  std::string tag;
+  for (std::string line; std::getline(in, line);) {
+    std::istringstream l(line);
+    Vec3d p;
+    if (l >> tag && tag == "v" && l >> p.x >> p.y >> p.z) v.push_back(p);
+  }
+  return v;
+}
+
+}  // namespace
+
+// The generated surfaces are closed solids wound outward: the box's volume exactly, the sphere's
+// and capsule's within the inscribed polyhedron's shortfall, every vertex on the shape.
+TEST(BodyMeshOutput, GeneratedSurfacesEncloseTheirShapes) {
+  constexpr double pi = std::numbers::pi;
+  RigidBodyDef box, sphere, capsule;
+  box.size = {0.5f, 0.25f, 0.125f};
+  sphere.shape = "sphere", sphere.radius = 0.5f;
+  capsule.shape = "capsule", capsule.radius = 0.25f, capsule.length = 1.0f;
+  const BodySurface b = body_surface(box), s = body_surface(sphere), c = body_surface(capsule);
+  EXPECT_EQ(b.triangles.size(), 12u);
+  EXPECT_NEAR(mesh_integrals(b.vertices, b.triangles).volume, 0.5 * 0.25 * 0.125, 1e-15);
+  const double ball = 4.0 / 3.0 * pi * 0.125;
+  const double sv = mesh_integrals(s.vertices, s.triangles).volume;
+  EXPECT_GT(sv, 0.97 * ball);
+  EXPECT_LT(sv, ball);
+  const double pill = pi * 0.0625 * 1.0 + 4.0 / 3.0 * pi * 0.015625;
+  const double cv = mesh_integrals(c.vertices, c.triangles).volume;
+  EXPECT_GT(cv, 0.97 * pill);
+  EXPECT_LT(cv, pill);
+  for (const Vec3d& p : s.vertices) EXPECT_NEAR(length(p), 0.5, 1e-12);
+  for (const Vec3d& p : c.vertices) {
+    const double along = std::max(std::fabs(p.y) - 0.5, 0.0);
+    EXPECT_NEAR(std::hypot(p.x, along, p.z), 0.25, 1e-12);
+  }
+}
+
+// Frame k's body OBJ holds the body's vertices in the world at frame k's pose: a mesh body at
+// rest without gravity sits where its file puts it, moved to `position`; a spinning box and the
+// spinning L have x + R(q) v for each body-frame vertex, and keep their shape.
+TEST(BodyMeshOutput, BodyObjOfFrameKHasTheBodysWorldVertices) {
+  std::vector<Vec3d> v;
+  Triangles t;
+  prism_mesh({{0, 0}, {0.4, 0}, {0.4, 0.2}, {0.2, 0.2}, {0.2, 0.4}, {0, 0.4}}, 0.1, v, t);
+  const fs::path obj = write_obj("frames", v, t);
+  const SceneDef scene = load_scene_text(fmt::format(R"({{
+    "solver": {{"gravity": [0, 0, 0]}},
+    "domain": {{"min": [-10, -10, -10], "max": [10, 10, 10]}},
+    "rigid_bodies": [
+      {{"name": "still", "shape": "mesh", "mesh": {{"file": "{0}", "scale": 2}}, "position": [1, 2, 3]}},
+      {{"name": "Spin_L", "shape": "mesh", "mesh": {{"file": "{0}"}}, "position": [0, 0, 0],
+        "velocity": [0.5, 0, 0], "angular_velocity": [1, 2, 3], "axis": [0, 0, 1], "angle": 30}},
+      {{"name": "box", "size": [0.4, 0.2, 0.1], "position": [0, 1, 0], "angular_velocity": [0, 0, 4]}}]
+  }})", obj.string()), "frames.json");
+  Simulation sim(scene);
+  const auto exporter = make_body_exporter(scene);
+  ASSERT_NE(exporter, nullptr);
+  EXPECT_EQ(exporter->files(7), (std::vector<fs::path>{"bodies.0007.jsonl", "still.0007.obj", "Spin_L.0007.obj", "box.0007.obj"}));
+  const Vec3d file_centre = scene.rigid_bodies[0].loaded_mesh->centre;  // of the file scaled by 2
+  for (int frame = 1; frame <= 12; ++frame) {
+    sim.step_frame();
+    if (frame != 1 && frame != 12) continue;
+    const std::vector<BodyPose> poses = sim.body_poses();
+    const auto files = exporter->encode_frame(FrameView{sim.particles(), scene, frame, sim.time(), poses});
+    ASSERT_EQ(files.size(), 4u);
+    EXPECT_EQ(files[1].name, fs::path(fmt::format("still.{:04d}.obj", frame)));
+    // At rest: the file's vertices, scaled, with the centre of mass moved to [1, 2, 3].
+    const std::vector<Vec3d> still = obj_vertices(files[1].bytes);
+    ASSERT_EQ(still.size(), v.size());
+    for (std::size_t i = 0; i < v.size(); ++i)
+      EXPECT_NEAR(length(still[i] - (2.0 * v[i] - file_centre + Vec3d{1, 2, 3})), 0.0, 1e-6) << i;
+    // Moving: x + R(q) v_body, rigidly.
+    for (std::size_t k : {std::size_t(1), std::size_t(2)}) {
+      const BodySurface surface = body_surface(scene.rigid_bodies[k]);
+      const std::vector<Vec3d> world = obj_vertices(files[k + 1].bytes);
+      ASSERT_EQ(world.size(), surface.vertices.size());
+      const Vec3d x{poses[k].position[0], poses[k].position[1], poses[k].position[2]};
+      const Quatd q{poses[k].orientation[0], poses[k].orientation[1], poses[k].orientation[2], poses[k].orientation[3]};
+      for (std::size_t i = 0; i < world.size(); ++i) {
+        EXPECT_NEAR(length(world[i] - (x + rotate(q, surface.vertices[i]))), 0.0, 1e-6) << k << " " << i;
+        EXPECT_NEAR(length(world[i] - world[0]), length(surface.vertices[i] - surface.vertices[0]), 2e-6);
+      }
+    }
+  }
+  // The box really turned (4 rad/s for 0.2 s) and the L moved.
+  const BodyPose box = sim.body_poses()[2];
+  EXPECT_NEAR(2.0 * std::acos(std::min(1.0, std::fabs(box.orientation[0]))), 0.8, 1e-9);
+  EXPECT_NEAR(sim.body_poses()[1].position[0], 0.1, 1e-12);
+  fs::remove(obj);
+}
+
+// output.body_meshes false: only the transforms; a body named like a cloth (or the scene, with a
+// fluid) would write the same .obj files, so it is refused, naming the field.
+TEST(BodyMeshOutput, OffSwitchAndNameClashes) {
+  const std::string body = R"("rigid_bodies": [{"name": "Flag", "position": [0.5, 0.5, 0.5]}])";
+  const SceneDef off = load_scene_text(R"({"output": {"body_meshes": false}, )" + body + "}", "off.json");
+  EXPECT_EQ(make_body_exporter(off)->files(1), (std::vector<fs::path>{"bodies.0001.jsonl"}));
+  const std::string cloth = R"("cloths": [{"name": "flag", "sheet": {"origin": [0.1, 0.9, 0.1], "size": [0.2, 0.2]}}])";
+  try {
+    load_scene_text("{" + cloth + ", " + body + "}", "clash.json");
+    ADD_FAILURE() << "a body named like a cloth was accepted";
+  } catch (const SceneError& e) {
+    EXPECT_EQ(e.json_path(), "rigid_bodies[0].name");
+    EXPECT_NE(e.problem().find("cloths[0].name"), std::string::npos) << e.what();
+  }
+  EXPECT_NO_THROW(load_scene_text(R"({"output": {"body_meshes": false}, )" + cloth + ", " + body + "}", "ok.json"));
+  try {
+    load_scene_text(R"({"name": "flag", "fluids": [{"box": {"min": [0, 0, 0], "max": [0.2, 0.2, 0.2]}}], )" + body + "}",
+                    "fluid.json");
+    ADD_FAILURE() << "a body named like the fluid's files was accepted";
+  } catch (const SceneError& e) {
+    EXPECT_EQ(e.json_path(), "rigid_bodies[0].name");
   }
 }

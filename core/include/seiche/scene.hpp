@@ -271,6 +271,7 @@ struct OutputDef {
   bool vdb_points = false;   ///< "points": VDB Points with attributes v and id
   bool vdb_velocity = false; ///< "v": velocity grid for motion blur
   bool mesh = false;         ///< bake: <name>.%04d.obj surface mesh per frame
+  bool body_meshes = true;   ///< <body name>.%04d.obj: every rigid body's surface in the world per frame
   float voxel_size = 0.0f;   ///< m; 0 = automatic (half the fluid spacing)
   bool anisotropic = false;  ///< Yu & Turk 2013 anisotropic surface instead of spheres
   bool half_float = false;   ///< store float grids as 16-bit halves

@@ -39,7 +39,8 @@ void principal_axes(const std::array<std::array<double, 3>, 3>& tensor, Vec3d& m
   std::array<int, 3> best{0, 1, 2}, order{0, 1, 2};
   double best_score = -1.0;
   do {
-    const double score = std::fabs(vectors(0, order[0])) + std::fabs(vectors(1, order[1])) + std::fabs(vectors(2, order[2]));
+    const double score =
+        std::fabs(vectors(0, order[0])) + std::fabs(vectors(1, order[1])) + std::fabs(vectors(2, order[2]));
     if (score > best_score) best_score = score, best = order;
   } while (std::next_permutation(order.begin(), order.end()));
   Eigen::Matrix3d r;

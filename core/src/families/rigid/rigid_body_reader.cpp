@@ -31,7 +31,8 @@ const KeyTable<RigidBodyDef>& rigid_body_keys() {
           .required()
           .valid_note("1 to 64 ASCII letters, digits, `_`, `-`, `.`; not starting with `.` or `-`; not `world`; "
                       "unique ignoring case")
-          .doc("names the body for joints and in `bodies.%04d.jsonl`"),
+          .doc("names the body for joints, in `bodies.%04d.jsonl` and its `<name>.%04d.obj` (not a cloth's name, "
+               "nor the scene's with a fluid)"),
       K("shape", &RigidBodyDef::shape)
           .choices({"box", "sphere", "capsule", "mesh"})
           .doc("a box (edges along the body's x, y, z), a sphere, a capsule (axis along the body's y), or a closed "
@@ -125,6 +126,25 @@ void read_rigid_body(JsonReader r, SceneDef& scene) {
   scene.rigid_bodies.push_back(b);
 }
 
+// With output.body_meshes a body writes <name>.%04d.obj: not a name whose .obj files another
+// output writes (the fluid's, named after the scene; a cloth's), compared ignoring case.
+void check_body_obj_name(const SceneDef& scene, const RigidBodyDef& b, const std::string& file,
+                         const std::string& path) {
+  if (!scene.output.body_meshes) return;
+  const std::string key = output_name_key(b.name);
+  std::string owner;
+  if (!scene.fluids.empty() && key == output_name_key(scene.name))
+    owner = fmt::format("name (\"{}\", the scene's name, which names the fluid's files)", scene.name);
+  for (std::size_t c = 0; c < scene.cloths.size() && owner.empty(); ++c)
+    if (key == output_name_key(scene.cloths[c].name))
+      owner = fmt::format("{}.name (\"{}\")", element_path("cloths", c), scene.cloths[c].name);
+  if (!owner.empty())
+    fail(file, path + ".name",
+         fmt::format("\"{}\" writes the same files ({}.%04d.obj) as {} (output names are compared ignoring case: "
+                     "case-folding file systems); give the body another name, or set output.body_meshes to false",
+                     b.name, b.name, owner));
+}
+
 void check_rigid_bodies(SceneDef& scene, const std::string& file) {
   for (std::size_t k = 0; k < scene.rigid_bodies.size(); ++k) {
     RigidBodyDef& b = scene.rigid_bodies[k];
@@ -133,6 +153,7 @@ void check_rigid_bodies(SceneDef& scene, const std::string& file) {
       if (output_name_key(scene.rigid_bodies[j].name) == output_name_key(b.name))
         fail(file, path + ".name",
              fmt::format("\"{}\" is also the name of rigid_bodies[{}] (names are compared ignoring case)", b.name, j));
+    check_body_obj_name(scene, b, file, path);
     if (body_shape_of(b.shape) == BodyShape::Mesh) {
       // Mesh paths become absolute (a resumed bake may run elsewhere); the OBJ is read once.
       b.mesh.file = resolve_mesh_path(b.mesh.file, scene.base_dir);
