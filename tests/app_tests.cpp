@@ -635,6 +635,20 @@ TEST(CliCloth, MissingObjIsBadInputNamingSceneFieldAndFile) {
   EXPECT_FALSE(fs::exists(work_dir() / "out_missing_obj"));
 }
 
+// A rigid body's OBJ wound inward (negative volume) is bad input: exit 2 naming the OBJ and the
+// field, and no output.
+TEST(CliRigid, InwardMeshBodyIsBadInputNamingObjAndField) {
+  const fs::path obj = work_dir() / "inward_body.obj";
+  std::ofstream(obj) << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 4 2\nf 1 3 4\nf 2 4 3\n";
+  const fs::path scene = write_scene("inward_body.json", R"({ "domain": { "min": [0,0,0], "max": [2,2,2] },
+    "rigid_bodies": [ { "name": "t", "shape": "mesh", "mesh": { "file": "inward_body.obj" }, "position": [1, 1, 1] } ] })");
+  const Result r = seiche("run " + q(scene) + " --frames 1 --out " + q(work_dir() / "out_inward_body"));
+  EXPECT_EQ(r.code, 2) << r.err;
+  for (const std::string s : {obj.string(), std::string("rigid_bodies[0].mesh.file"), std::string("wound inward")})
+    EXPECT_NE(r.err.find(s), std::string::npos) << s << " missing from: " << r.err;
+  EXPECT_FALSE(fs::exists(work_dir() / "out_inward_body"));
+}
+
 TEST(CliCloth, NonManifoldObjIsBadInput) {
   const fs::path dir = work_dir() / "nonmanifold";
   fs::create_directories(dir);

@@ -11,16 +11,22 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <numbers>
+#include <sstream>
 #include <string>
 #include <vector>
 
+#include "families/rigid/body_mesh.hpp"
 #include "families/rigid/body_shape.hpp"
+#include "families/rigid/body_surface.hpp"
 #include "families/rigid/portable_trig.hpp"
 #include "families/rigid/rigid_body.hpp"
 #include "families/rigid/rigid_family.hpp"
 #include "seiche/body_exporter.hpp"
 #include "seiche/checkpoint.hpp"
+#include "seiche/input_fingerprint.hpp"
 #include "seiche/output_files.hpp"
 #include "seiche/scene_loader.hpp"
 #include "seiche/simulation.hpp"
@@ -472,6 +478,361 @@ TEST(Joints, SliderMovesOnlyAlongItsAxisWithinItsTravel) {
   EXPECT_LT(worst_turn, 1e-6);
   EXPECT_GT(lowest, -0.4 - 2e-3);
   EXPECT_LT(lowest, -0.399) << "the cart should reach the end of its travel";
+}
+
+// ---- Mesh bodies: mass properties from a closed triangle mesh ------------------------------------
+
+namespace {
+
+using Tensor = std::array<std::array<double, 3>, 3>;
+using Triangles = std::vector<std::array<std::uint32_t, 3>>;
+
+// A closed box mesh [lo, hi], wound outward (12 triangles).
+void box_mesh(Vec3d lo, Vec3d hi, std::vector<Vec3d>& v, Triangles& t) {
+  const std::uint32_t base = std::uint32_t(v.size());
+  for (int k = 0; k < 8; ++k) v.push_back({k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y, k & 4 ? hi.z : lo.z});
+  const std::uint32_t quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (const auto& q : quads) {
+    t.push_back({base + q[0], base + q[1], base + q[2]});
+    t.push_back({base + q[0], base + q[2], base + q[3]});
+  }
+}
+
+// The polygon (counter-clockwise in xy, star-shaped from its first vertex) extruded over z in
+// [0, depth], wound outward.
+void prism_mesh(const std::vector<std::array<double, 2>>& polygon, double depth, std::vector<Vec3d>& v, Triangles& t) {
+  const std::uint32_t n = std::uint32_t(polygon.size());
+  for (double z : {0.0, depth})
+    for (const auto& p : polygon) v.push_back({p[0], p[1], z});
+  for (std::uint32_t i = 1; i + 1 < n; ++i) {
+    t.push_back({0, i + 1, i});          // bottom, facing -z
+    t.push_back({n, n + i, n + i + 1});  // top, facing +z
+  }
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const std::uint32_t j = (i + 1) % n;
+    t.push_back({i, j, n + j});
+    t.push_back({i, n + j, n + i});
+  }
+}
+
+// A solid box's inertia tensor per unit density about `about`: its own diagonal plus the
+// parallel-axis shift V (|d|^2 Id - d d^T), d = centre - about.
+Tensor box_tensor(Vec3d lo, Vec3d hi, Vec3d about) {
+  const Vec3d s = hi - lo, d = 0.5 * (lo + hi) - about;
+  const double v = s.x * s.y * s.z;
+  const double dd[3] = {d.x, d.y, d.z};
+  Tensor t{};
+  t[0][0] = v / 12 * (s.y * s.y + s.z * s.z), t[1][1] = v / 12 * (s.x * s.x + s.z * s.z),
+  t[2][2] = v / 12 * (s.x * s.x + s.y * s.y);
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) t[i][j] += v * ((i == j ? dot(d, d) : 0.0) - dd[i] * dd[j]);
+  return t;
+}
+
+void expect_tensor_near(const Tensor& a, const Tensor& b, double tolerance) {
+  const double scale = std::fabs(b[0][0]) + std::fabs(b[1][1]) + std::fabs(b[2][2]);
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) EXPECT_NEAR(a[i][j], b[i][j], tolerance * scale) << i << j;
+}
+
+// Writes the mesh as an OBJ under the temporary folder and returns its path.
+fs::path write_obj(const std::string& name, const std::vector<Vec3d>& v, const Triangles& t) {
+  const fs::path path = fs::temp_directory_path() / ("seiche_body_" + name + ".obj");
+  std::string text;
+  for (const Vec3d& p : v) text += fmt::format("v {} {} {}\n", p.x, p.y, p.z);
+  for (const auto& f : t) text += fmt::format("f {} {} {}\n", f[0] + 1, f[1] + 1, f[2] + 1);
+  write_file_atomically(path, text);
+  return path;
+}
+
+std::string mesh_body_scene(const fs::path& obj, const std::string& rest = "") {
+  return fmt::format(R"({{
+    "domain": {{"min": [-10, -50, -10], "max": [10, 10, 10]}},
+    "rigid_bodies": [{{"name": "m", "shape": "mesh", "mesh": {{"file": "{}"}}, "density": 500, "position": [1, 2, 3]{}}}]
+  }})", obj.string(), rest);
+}
+
+}  // namespace
+
+TEST(MeshBody, BoxMeshHasTheBoxFormulasInertia) {
+  std::vector<Vec3d> v;
+  Triangles t;
+  box_mesh({-0.2, -0.1, -0.05}, {0.2, 0.1, 0.05}, v, t);
+  const MeshIntegrals m = mesh_integrals(v, t);
+  EXPECT_NEAR(m.volume, 0.4 * 0.2 * 0.1, 1e-9 * 0.008);
+  EXPECT_NEAR(length(m.centre), 0.0, 1e-15);
+  const MassProperties box = mass_properties({BodyShape::Box, {0.4, 0.2, 0.1}, 0.0, 0.0, 1.0, nullptr});
+  expect_tensor_near(m.inertia, {{{box.inertia.x, 0, 0}, {0, box.inertia.y, 0}, {0, 0, box.inertia.z}}}, 1e-9);
+  // Offset far from the file's origin: the centre moves with it, the tensor does not.
+  std::vector<Vec3d> moved;
+  for (const Vec3d& p : v) moved.push_back(p + Vec3d{5.0, -3.0, 2.0});
+  const MeshIntegrals o = mesh_integrals(moved, t);
+  EXPECT_NEAR(length(o.centre - Vec3d{5.0, -3.0, 2.0}), 0.0, 1e-12);
+  EXPECT_NEAR(o.volume, m.volume, 1e-9 * m.volume);
+  expect_tensor_near(o.inertia, m.inertia, 1e-9);
+  // Through the reader (an OBJ in float, dimensions exact in binary): the same mass and moments
+  // as the box body of the same size, and the box's frame (no turn).
+  std::vector<Vec3d> exact;
+  Triangles et;
+  box_mesh({4.0, -3.0, 2.0}, {4.5, -2.75, 2.125}, exact, et);
+  const fs::path obj = write_obj("box", exact, et);
+  const SceneDef scene = load_scene_text(mesh_body_scene(obj), "box.json");
+  const MassProperties mp = mass_properties(body_shape_def(scene.rigid_bodies[0]));
+  const MassProperties boxed = mass_properties({BodyShape::Box, {0.5, 0.25, 0.125}, 0.0, 0.0, 500.0, nullptr});
+  EXPECT_NEAR(mp.mass, boxed.mass, 1e-12 * boxed.mass);
+  expect_near_relative(mp.inertia, boxed.inertia, 1e-9);
+  EXPECT_EQ(mp.principal.w, 1.0);
+  EXPECT_NEAR(length(scene.rigid_bodies[0].loaded_mesh->centre - Vec3d{4.25, -2.875, 2.0625}), 0.0, 1e-12);
+  // The OBJ is fingerprinted for bake.json from the bytes the loader read.
+  const std::vector<InputFile> inputs = scene_input_files(scene);
+  ASSERT_EQ(inputs.size(), 1u);
+  EXPECT_EQ(inputs[0].json_path, "rigid_bodies[0].mesh.file");
+  EXPECT_EQ(inputs[0].file, obj.string());
+  EXPECT_EQ(inputs[0].bytes, fs::file_size(obj));
+  std::ifstream in(obj, std::ios::binary);
+  const std::string bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  EXPECT_EQ(inputs[0].fnv1a64, fnv1a64(bytes));
+  fs::remove(obj);
+}
+
+// The tetrahedron (0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1): V = 1/6, centre (1/4, 1/4, 1/4),
+// int x^2 = 1/60 and int xy = 1/120 about the origin, so about the centre I_xx = 2 (1/60 - 1/96)
+// = 1/80 and I_xy = -(1/120 - 1/96) = 1/480; principal moments 1/80 + 2/480 = 1/60 along
+// (1, 1, 1) and 1/80 - 1/480 = 1/96 twice.
+TEST(MeshBody, TetrahedronMatchesItsClosedForm) {
+  const std::vector<Vec3d> v{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  const Triangles t{{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  const MeshIntegrals m = mesh_integrals(v, t);
+  EXPECT_NEAR(m.volume, 1.0 / 6.0, 1e-15);
+  EXPECT_NEAR(length(m.centre - Vec3d{0.25, 0.25, 0.25}), 0.0, 1e-15);
+  const double d = 1.0 / 80.0, o = 1.0 / 480.0;
+  expect_tensor_near(m.inertia, {{{d, o, o}, {o, d, o}, {o, o, d}}}, 1e-12);
+  const fs::path obj = write_obj("tetra", v, t);
+  const SceneDef scene = load_scene_text(mesh_body_scene(obj), "tetra.json");
+  const rigid::BodyMesh& body = *scene.rigid_bodies[0].loaded_mesh;
+  std::array<double, 3> moments{body.unit_inertia.x, body.unit_inertia.y, body.unit_inertia.z};
+  std::sort(moments.begin(), moments.end());
+  EXPECT_NEAR(moments[0], 1.0 / 96.0, 1e-12);
+  EXPECT_NEAR(moments[1], 1.0 / 96.0, 1e-12);
+  EXPECT_NEAR(moments[2], 1.0 / 60.0, 1e-12);
+  // The body frame is a proper rotation, and its axis of 1/60 is the diagonal (1, 1, 1).
+  const int largest = body.unit_inertia.x > body.unit_inertia.y
+                          ? (body.unit_inertia.x > body.unit_inertia.z ? 0 : 2)
+                          : (body.unit_inertia.y > body.unit_inertia.z ? 1 : 2);
+  const Vec3d axis = rotate(body.principal, Vec3d{largest == 0 ? 1.0 : 0.0, largest == 1 ? 1.0 : 0.0, largest == 2 ? 1.0 : 0.0});
+  EXPECT_NEAR(std::fabs(dot(axis, Vec3d{1, 1, 1})) / std::sqrt(3.0), 1.0, 1e-9);
+  EXPECT_NEAR(body.principal.w * body.principal.w + dot(body.principal.vec(), body.principal.vec()), 1.0, 1e-15);
+  // Body-frame vertices: centred on the centre of mass.
+  Vec3d sum;
+  for (const Vec3d& p : body.vertices) sum += p;
+  EXPECT_NEAR(length(sum), 0.0, 1e-7);  // float vertices: (0.25, 0.25, 0.25) removed from each
+  fs::remove(obj);
+}
+
+// A concave L (the boxes [0, 2] x [0, 1] and [0, 1] x [1, 2], 1 deep): the mesh's volume, centre
+// and full tensor (with its product of inertia I_xy) are the two boxes' by the parallel-axis shift.
+TEST(MeshBody, ConcaveLShapeIsTheSumOfItsBoxes) {
+  std::vector<Vec3d> v;
+  Triangles t;
+  prism_mesh({{0, 0}, {2, 0}, {2, 1}, {1, 1}, {1, 2}, {0, 2}}, 1.0, v, t);
+  const MeshIntegrals m = mesh_integrals(v, t);
+  EXPECT_NEAR(m.volume, 3.0, 1e-12);
+  const Vec3d a_lo{0, 0, 0}, a_hi{2, 1, 1}, b_lo{0, 1, 0}, b_hi{1, 2, 1};
+  const Vec3d centre = (1.0 / 3.0) * (2.0 * Vec3d{1.0, 0.5, 0.5} + Vec3d{0.5, 1.5, 0.5});
+  EXPECT_NEAR(length(m.centre - centre), 0.0, 1e-12);
+  Tensor expected = box_tensor(a_lo, a_hi, centre);
+  const Tensor b = box_tensor(b_lo, b_hi, centre);
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) expected[i][j] += b[i][j];
+  ASSERT_GT(std::fabs(expected[0][1]), 0.1);  // a real product of inertia
+  expect_tensor_near(m.inertia, expected, 1e-12);
+}
+
+// A mesh body (the L, turned so that its principal frame is not the file's) thrown up and
+// spinning keeps its angular momentum and rotational energy, as the box does, and the whole
+// simulation runs it.
+TEST(MeshBody, FallingSpinningMeshKeepsAngularMomentum) {
+  std::vector<Vec3d> v;
+  Triangles t;
+  prism_mesh({{0, 0}, {0.4, 0}, {0.4, 0.2}, {0.2, 0.2}, {0.2, 0.4}, {0, 0.4}}, 0.1, v, t);
+  const fs::path obj = write_obj("spin", v, t);
+  const SceneDef scene = load_scene_text(
+      mesh_body_scene(obj, R"(, "velocity": [1, 2, 0], "angular_velocity": [0.3, 3, 0.2], "axis": [1, 1, 0], "angle": 40)"),
+      "spin.json");
+  const RigidFamily bodies(scene);
+  RigidBody b = bodies.bodies()[0];
+  EXPECT_NEAR(1.0 / b.inverse_mass, 500.0 * 0.4 * 0.4 * 0.1 * 0.75, 1e-6);
+  EXPECT_NE(scene.rigid_bodies[0].loaded_mesh->principal.w, 1.0);  // the L's axes are diagonal
+  const double h = 1.0 / 480.0;
+  const Vec3d momentum0 = angular_momentum(b);
+  const double rotational0 = rotational_energy(b);
+  for (int step = 1; step <= 960; ++step) {
+    predict_body(b, {0.0, -9.81, 0.0}, h);
+    update_body_velocity(b, h);
+    ASSERT_NEAR(length(angular_momentum(b) - momentum0), 0.0, 1e-11 * length(momentum0)) << "substep " << step;
+    ASSERT_NEAR(rotational_energy(b), rotational0, 1e-11 * rotational0) << "substep " << step;
+  }
+  Simulation sim(scene);
+  for (int f = 0; f < 30; ++f) ASSERT_EQ(sim.step_frame().non_finite, 0u);
+  EXPECT_NEAR(sim.body_poses()[0].position[0], 1.0 + 0.5, 1e-9);  // 0.5 s at 1 m/s
+  fs::remove(obj);
+}
+
+// Meshes without a solid are refused, naming the OBJ and rigid_bodies[k].mesh.file: an open
+// one, a flat one (two triangles back to back: closed, no volume), one wound inward, one wound
+// both ways.
+TEST(MeshBody, MeshesWithoutASolidAreRefused) {
+  std::vector<Vec3d> box;
+  Triangles outward;
+  box_mesh({0, 0, 0}, {1, 1, 1}, box, outward);
+  Triangles open(outward.begin(), outward.end() - 2), inward, mixed = outward;
+  for (const auto& f : outward) inward.push_back({f[0], f[2], f[1]});
+  mixed[0] = {outward[0][0], outward[0][2], outward[0][1]};
+  const std::vector<Vec3d> flat{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  struct Case {
+    std::string name;
+    std::vector<Vec3d> vertices;
+    Triangles triangles;
+    std::string problem;
+  };
+  const std::vector<Case> cases{{"open", box, open, "must be closed"},
+                                {"flat", flat, {{0, 1, 2}, {0, 2, 1}}, "encloses no volume"},
+                                {"inward", box, inward, "wound inward"},
+                                {"mixed", box, mixed, "not wound consistently"}};
+  for (const Case& c : cases) {
+    const fs::path obj = write_obj(c.name, c.vertices, c.triangles);
+    try {
+      load_scene_text(mesh_body_scene(obj), c.name + ".json");
+      ADD_FAILURE() << c.name << ": accepted";
+    } catch (const SceneError& e) {
+      EXPECT_EQ(e.json_path(), "rigid_bodies[0].mesh.file") << c.name;
+      EXPECT_EQ(e.file(), obj.string()) << c.name;
+      EXPECT_NE(e.problem().find(c.problem), std::string::npos) << c.name << ": " << e.what();
+    }
+    fs::remove(obj);
+  }
+}
+
+// ---- Body meshes per frame: <body name>.%04d.obj -----------------------------------------------
+
+namespace {
+
+std::vector<Vec3d> obj_vertices(const std::string& text) {
+  std::vector<Vec3d> v;
+  std::istringstream in(text);
+  std::string tag;
+  for (std::string line; std::getline(in, line);) {
+    std::istringstream l(line);
+    Vec3d p;
+    if (l >> tag && tag == "v" && l >> p.x >> p.y >> p.z) v.push_back(p);
+  }
+  return v;
+}
+
+}  // namespace
+
+// The generated surfaces are closed solids wound outward: the box's volume exactly, the sphere's
+// and capsule's within the inscribed polyhedron's shortfall, every vertex on the shape.
+TEST(BodyMeshOutput, GeneratedSurfacesEncloseTheirShapes) {
+  constexpr double pi = std::numbers::pi;
+  RigidBodyDef box, sphere, capsule;
+  box.size = {0.5f, 0.25f, 0.125f};
+  sphere.shape = "sphere", sphere.radius = 0.5f;
+  capsule.shape = "capsule", capsule.radius = 0.25f, capsule.length = 1.0f;
+  const BodySurface b = body_surface(box), s = body_surface(sphere), c = body_surface(capsule);
+  EXPECT_EQ(b.triangles.size(), 12u);
+  EXPECT_NEAR(mesh_integrals(b.vertices, b.triangles).volume, 0.5 * 0.25 * 0.125, 1e-15);
+  const double ball = 4.0 / 3.0 * pi * 0.125;
+  const double sv = mesh_integrals(s.vertices, s.triangles).volume;
+  EXPECT_GT(sv, 0.97 * ball);
+  EXPECT_LT(sv, ball);
+  const double pill = pi * 0.0625 * 1.0 + 4.0 / 3.0 * pi * 0.015625;
+  const double cv = mesh_integrals(c.vertices, c.triangles).volume;
+  EXPECT_GT(cv, 0.97 * pill);
+  EXPECT_LT(cv, pill);
+  for (const Vec3d& p : s.vertices) EXPECT_NEAR(length(p), 0.5, 1e-12);
+  for (const Vec3d& p : c.vertices) {
+    const double along = std::max(std::fabs(p.y) - 0.5, 0.0);
+    EXPECT_NEAR(std::hypot(p.x, along, p.z), 0.25, 1e-12);
+  }
+}
+
+// Frame k's body OBJ holds the body's vertices in the world at frame k's pose: a mesh body at
+// rest without gravity sits where its file puts it, moved to `position`; a spinning box and the
+// spinning L have x + R(q) v for each body-frame vertex, and keep their shape.
+TEST(BodyMeshOutput, BodyObjOfFrameKHasTheBodysWorldVertices) {
+  std::vector<Vec3d> v;
+  Triangles t;
+  prism_mesh({{0, 0}, {0.4, 0}, {0.4, 0.2}, {0.2, 0.2}, {0.2, 0.4}, {0, 0.4}}, 0.1, v, t);
+  const fs::path obj = write_obj("frames", v, t);
+  const SceneDef scene = load_scene_text(fmt::format(R"({{
+    "solver": {{"gravity": [0, 0, 0]}},
+    "domain": {{"min": [-10, -10, -10], "max": [10, 10, 10]}},
+    "rigid_bodies": [
+      {{"name": "still", "shape": "mesh", "mesh": {{"file": "{0}", "scale": 2}}, "position": [1, 2, 3]}},
+      {{"name": "Spin_L", "shape": "mesh", "mesh": {{"file": "{0}"}}, "position": [0, 0, 0],
+        "velocity": [0.5, 0, 0], "angular_velocity": [1, 2, 3], "axis": [0, 0, 1], "angle": 30}},
+      {{"name": "box", "size": [0.4, 0.2, 0.1], "position": [0, 1, 0], "angular_velocity": [0, 0, 4]}}]
+  }})", obj.string()), "frames.json");
+  Simulation sim(scene);
+  const auto exporter = make_body_exporter(scene);
+  ASSERT_NE(exporter, nullptr);
+  EXPECT_EQ(exporter->files(7), (std::vector<fs::path>{"bodies.0007.jsonl", "still.0007.obj", "Spin_L.0007.obj", "box.0007.obj"}));
+  const Vec3d file_centre = scene.rigid_bodies[0].loaded_mesh->centre;  // of the file scaled by 2
+  for (int frame = 1; frame <= 12; ++frame) {
+    sim.step_frame();
+    if (frame != 1 && frame != 12) continue;
+    const std::vector<BodyPose> poses = sim.body_poses();
+    const auto files = exporter->encode_frame(FrameView{sim.particles(), scene, frame, sim.time(), poses});
+    ASSERT_EQ(files.size(), 4u);
+    EXPECT_EQ(files[1].name, fs::path(fmt::format("still.{:04d}.obj", frame)));
+    // At rest: the file's vertices, scaled, with the centre of mass moved to [1, 2, 3].
+    const std::vector<Vec3d> still = obj_vertices(files[1].bytes);
+    ASSERT_EQ(still.size(), v.size());
+    for (std::size_t i = 0; i < v.size(); ++i)
+      EXPECT_NEAR(length(still[i] - (2.0 * v[i] - file_centre + Vec3d{1, 2, 3})), 0.0, 1e-6) << i;
+    // Moving: x + R(q) v_body, rigidly.
+    for (std::size_t k : {std::size_t(1), std::size_t(2)}) {
+      const BodySurface surface = body_surface(scene.rigid_bodies[k]);
+      const std::vector<Vec3d> world = obj_vertices(files[k + 1].bytes);
+      ASSERT_EQ(world.size(), surface.vertices.size());
+      const Vec3d x{poses[k].position[0], poses[k].position[1], poses[k].position[2]};
+      const Quatd q{poses[k].orientation[0], poses[k].orientation[1], poses[k].orientation[2], poses[k].orientation[3]};
+      for (std::size_t i = 0; i < world.size(); ++i) {
+        EXPECT_NEAR(length(world[i] - (x + rotate(q, surface.vertices[i]))), 0.0, 1e-6) << k << " " << i;
+        EXPECT_NEAR(length(world[i] - world[0]), length(surface.vertices[i] - surface.vertices[0]), 2e-6);
+      }
+    }
+  }
+  // The box really turned (4 rad/s for 0.2 s) and the L moved.
+  const BodyPose box = sim.body_poses()[2];
+  EXPECT_NEAR(2.0 * std::acos(std::min(1.0, std::fabs(box.orientation[0]))), 0.8, 1e-9);
+  EXPECT_NEAR(sim.body_poses()[1].position[0], 0.1, 1e-12);
+  fs::remove(obj);
+}
+
+// output.body_meshes false: only the transforms; a body named like a cloth (or the scene, with a
+// fluid) would write the same .obj files, so it is refused, naming the field.
+TEST(BodyMeshOutput, OffSwitchAndNameClashes) {
+  const std::string body = R"("rigid_bodies": [{"name": "Flag", "position": [0.5, 0.5, 0.5]}])";
+  const SceneDef off = load_scene_text(R"({"output": {"body_meshes": false}, )" + body + "}", "off.json");
+  EXPECT_EQ(make_body_exporter(off)->files(1), (std::vector<fs::path>{"bodies.0001.jsonl"}));
+  const std::string cloth = R"("cloths": [{"name": "flag", "sheet": {"origin": [0.1, 0.9, 0.1], "size": [0.2, 0.2]}}])";
+  try {
+    load_scene_text("{" + cloth + ", " + body + "}", "clash.json");
+    ADD_FAILURE() << "a body named like a cloth was accepted";
+  } catch (const SceneError& e) {
+    EXPECT_EQ(e.json_path(), "rigid_bodies[0].name");
+    EXPECT_NE(e.problem().find("cloths[0].name"), std::string::npos) << e.what();
+  }
+  EXPECT_NO_THROW(load_scene_text(R"({"output": {"body_meshes": false}, )" + cloth + ", " + body + "}", "ok.json"));
+  try {
+    load_scene_text(R"({"name": "flag", "fluids": [{"box": {"min": [0, 0, 0], "max": [0.2, 0.2, 0.2]}}], )" + body + "}",
+                    "fluid.json");
+    ADD_FAILURE() << "a body named like the fluid's files was accepted";
+  } catch (const SceneError& e) {
+    EXPECT_EQ(e.json_path(), "rigid_bodies[0].name");
+  }
 }
 
 // ---- portable_trig.hpp against the C library ---------------------------------------------------

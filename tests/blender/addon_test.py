@@ -1,7 +1,10 @@
 # The Blender add-on's test (blender/addons/seiche_importer), run by ctest through
 # run_addon_test.sh inside Debian's Blender, headless:
-#   blender -b --factory-startup --python-exit-code 1 --python addon_test.py -- REPO BAKE_DIR OUT_DIR
-# BAKE_DIR is a bake of tests/data/blender_small.json (3 frames: a fluid block and a cloth).
+#   blender -b --factory-startup --python-exit-code 1 --python addon_test.py -- REPO BAKE_DIR OUT_DIR BODIES_DIR
+# BAKE_DIR is a bake of tests/data/blender_small.json (3 frames: a fluid block and a cloth),
+# BODIES_DIR one of tests/data/blender_bodies.json (4 frames: a box and an OBJ mesh body; each
+# body one object whose keyframes are the bodies.%04d.jsonl transforms and whose vertices are the
+# frame's <body>.%04d.obj, and no body OBJ imported a second time as a cloth).
 # It enables the add-on from the repository, imports the bake, steps the frames and checks
 # against the files, read here independently of the add-on: the particles' count, positions,
 # `velocity` and `id` (= the PLY's, and readable by Geometry Nodes), the cloth's vertices (= the
@@ -17,7 +20,7 @@ import addon_utils
 import bpy
 import numpy as np
 
-REPO, BAKE, OUT = sys.argv[sys.argv.index("--") + 1:][:3]
+REPO, BAKE, OUT, BODIES = sys.argv[sys.argv.index("--") + 1:][:4]
 FRAMES = (1, 2, 3)
 SPACING = 0.025  # tests/data/blender_small.json: fluids[0].spacing
 FRAME_DT = 0.04  # solver.frame_dt
@@ -231,6 +234,46 @@ check(np.allclose(co.reshape(-1, 3), expected["p"] + offset, rtol=1e-6, atol=1e-
 particles.modifiers.remove(particles.modifiers["test attributes"])
 for m in particles.modifiers:
     m.show_viewport = True
+
+# ---- rigid bodies: one object per body, keyframed from bodies.%04d.jsonl ----------------------
+def body_lines(frame):
+    with open(os.path.join(BODIES, f"bodies.{frame:04d}.jsonl")) as f:
+        return {b["name"]: b for b in map(json.loads, f.read().splitlines())}
+
+
+before = set(bpy.data.objects)
+bpy.ops.import_scene.seiche_bake(directory=BODIES, set_timing=False)
+made = [o for o in bpy.data.objects if o not in before]
+bodies_root = next((o for o in made if o.name == "blender_bodies"), None)
+check(sorted(o.name for o in made) == ["ball", "blender_bodies", "swing"],
+      f"the bodies' bake makes its root and one object per body, no body OBJ as a cloth ({sorted(o.name for o in made)})")
+check(body_lines(1)["swing"]["position"] != body_lines(4)["swing"]["position"] and
+      body_lines(1)["ball"]["orientation"] != body_lines(4)["ball"]["orientation"],
+      "the bodies move and turn between frames 1 and 4 (so the checks below can fail)")
+for name in ("swing", "ball"):
+    body = bpy.data.objects.get(name)
+    if body is None or bodies_root is None:
+        check(False, f"body {name} imported")
+        continue
+    check(body.type == "MESH" and body.parent == bodies_root and body.rotation_mode == "QUATERNION" and
+          "seiche_sequence" not in body,
+          f"{name}: a mesh under the scene's root, turned by quaternion keyframes, not a frame sequence")
+    for frame in (1, 2, 3, 4):
+        scene.frame_set(frame)
+        line = body_lines(frame)[name]
+        q = np.array(body.rotation_quaternion)
+        check(np.abs(np.array(body.location) - line["position"]).max() < 1e-6 and
+              abs(abs(float(np.dot(q, line["orientation"]))) - 1) < 1e-6,
+              f"frame {frame}: {name}'s keyframed location and rotation are the JSON line's")
+        # The object's vertices through its keyframed transform (in the root's Seiche frame) are
+        # the frame's OBJ.
+        local = np.array(bodies_root.matrix_world.inverted() @ body.matrix_world)
+        co = np.empty(3 * len(body.data.vertices), dtype=np.float64)
+        body.data.vertices.foreach_get("co", co)
+        co = co.reshape(-1, 3) @ local[:3, :3].T + local[:3, 3]
+        expected = obj_vertices(os.path.join(BODIES, f"{name}.{frame:04d}.obj"))
+        check(len(co) == len(expected) and np.abs(co - expected).max() < 1e-5,
+              f"frame {frame}: {name}'s {len(co)} vertices lie on its OBJ's {len(expected)}")
 
 # ---- render frame 3 headless: the handler loads frame 3 in the render itself ----------------
 scene.frame_set(1)

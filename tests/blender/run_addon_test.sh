@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # ctest's Blender.AddonImportsABakeAndRenders: bakes tests/data/blender_small.json (3 frames,
-# a fluid block and a cloth) with seiche, then runs addon_test.py inside Blender, headless.
+# a fluid block and a cloth) and tests/data/blender_bodies.json (4 frames, two rigid bodies: a
+# box and an OBJ mesh) with seiche, then runs addon_test.py inside Blender, headless.
 # Without Blender the test fails (it is not skipped): `make test` installs Debian's blender.
 #   run_addon_test.sh SEICHE_EXE REPO WORK_DIR
 set -euo pipefail
@@ -14,5 +15,7 @@ rm -rf "$work"
 mkdir -p "$work/out"
 "$seiche" bake "$repo/tests/data/blender_small.json" --out "$work/bake" --threads 1 >"$work/bake.log" 2>&1 ||
   { cat "$work/bake.log" >&2; echo "FAIL: seiche bake of tests/data/blender_small.json failed" >&2; exit 1; }
+"$seiche" bake "$repo/tests/data/blender_bodies.json" --out "$work/bodies" --threads 1 >"$work/bodies.log" 2>&1 ||
+  { cat "$work/bodies.log" >&2; echo "FAIL: seiche bake of tests/data/blender_bodies.json failed" >&2; exit 1; }
 blender -b --factory-startup --python-exit-code 1 --python "$repo/tests/blender/addon_test.py" -- \
-  "$repo" "$work/bake" "$work/out"
+  "$repo" "$work/bake" "$work/out" "$work/bodies"

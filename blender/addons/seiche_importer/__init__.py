@@ -18,7 +18,7 @@ bl_info = {
     "blender": (3, 4, 0),
     "location": "File > Import > Seiche bake",
     "description": "Imports a Seiche bake folder: fluid surface, density volume, particles with "
-                   "velocity and id, cloth meshes, frame rate and range",
+                   "velocity and id, cloth meshes, rigid bodies (keyframed), frame rate and range",
     "category": "Import-Export",
 }
 

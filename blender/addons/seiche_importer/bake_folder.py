@@ -5,6 +5,10 @@
 #   particles.%04d.ply        every particle (x y z vx vy vz id)
 #   <scene name>.%04d.vdb     the fluid's grids (level set "surface", fog "density", ...)
 #   <scene name>.%04d.obj     the fluid surface as a mesh (output.mesh)
+#   bodies.%04d.jsonl         every rigid body's transform (a JSON line per body: name, position,
+#                             orientation [w, x, y, z], velocity, angular velocity)
+#   <body name>.%04d.obj      a rigid body's surface in the world (output.body_meshes): the body's
+#                             mesh, not a cloth (the body names are the scene's rigid_bodies)
 #   <any other stem>.%04d.obj a mesh whose vertices follow the frames (every cloth)
 # Anything wrong raises BakeFolderError with a message naming the file and the problem.
 import json
@@ -14,7 +18,7 @@ import re
 DEFAULT_FRAME_DT = 1.0 / 60.0  # solver.frame_dt's default (docs/scene-format.md)
 DEFAULT_SPACING = 0.02  # fluids[k].spacing's default
 
-_FRAME_FILE = re.compile(r"^(?P<stem>[^/]+)\.(?P<frame>\d{4,})\.(?P<ext>vdb|obj|ply)$")
+_FRAME_FILE = re.compile(r"^(?P<stem>[^/]+)\.(?P<frame>\d{4,})\.(?P<ext>vdb|obj|ply|jsonl)$")
 _KEY_STEP = re.compile(r"\[(\d+)\]|([^.\[\]]+)")
 
 
@@ -57,12 +61,16 @@ class BakeFolder:
         self.particles = by_name.pop(("particles", "ply"), None)
         self.fluid_vdb = by_name.pop((scene_name, "vdb"), None)
         self.fluid_obj = by_name.pop((scene_name, "obj"), None)
+        self.bodies = by_name.pop(("bodies", "jsonl"), None)
+        # Every rigid body by name (scene order): its OBJ sequence, or None without body meshes.
+        self.body_meshes = {name: by_name.pop((name, "obj"), None) for name in body_names(scene)} \
+            if self.bodies else {}
         self.meshes = sorted((s for (stem, ext), s in by_name.items() if ext == "obj"), key=lambda s: s.stem)
 
     @property
     def frames_present(self):
         """(first, last) over every imported sequence: the frames on disk (an interrupted bake has fewer)."""
-        seqs = [s for s in (self.particles, self.fluid_vdb, self.fluid_obj, *self.meshes) if s]
+        seqs = [s for s in (self.particles, self.fluid_vdb, self.fluid_obj, self.bodies, *self.meshes) if s]
         return min(s.first for s in seqs), max(s.last for s in seqs)
 
     def fluid_spacing(self):
@@ -72,6 +80,34 @@ class BakeFolder:
             return None
         spacing = fluids[0].get("spacing", DEFAULT_SPACING)
         return float(spacing) if _is_number(spacing) and spacing > 0 else DEFAULT_SPACING
+
+
+def body_names(scene):
+    """The names of the scene's rigid bodies, in scene order."""
+    bodies = scene.get("rigid_bodies") or []
+    return [b["name"] for b in bodies if isinstance(b, dict) and isinstance(b.get("name"), str)]
+
+
+def read_body_frame(path):
+    """bodies.%04d.jsonl: {name: (position (3,), orientation [w, x, y, z])}."""
+    poses = {}
+    try:
+        with open(path, "r", encoding="utf-8") as f:
+            lines = f.read().splitlines()
+    except OSError as e:
+        raise BakeFolderError(f"{path}: cannot read: {e.strerror}") from None
+    for number, line in enumerate(lines, 1):
+        if not line.strip():
+            continue
+        try:
+            body = json.loads(line)
+            pose = ([float(v) for v in body["position"]], [float(v) for v in body["orientation"]])
+            if len(pose[0]) != 3 or len(pose[1]) != 4:
+                raise ValueError("a position of 3 and an orientation of 4 numbers")
+            poses[str(body["name"])] = pose
+        except (ValueError, KeyError, TypeError) as e:
+            raise BakeFolderError(f"{path}: line {number}: not a body's transform ({e})") from None
+    return poses
 
 
 def _is_number(v):
@@ -177,7 +213,7 @@ def read_bake_folder(directory):
             apply_override(scene, override)
     bake = BakeFolder(directory, scene_name, first, last, _frame_dt(directory, scene), scene,
                       _sequences(directory, first, last))
-    if not (bake.particles or bake.fluid_vdb or bake.fluid_obj or bake.meshes):
+    if not (bake.particles or bake.fluid_vdb or bake.fluid_obj or bake.bodies or bake.meshes):
         raise BakeFolderError(f"{directory}: the bake of \"{scene_name}\" (frames {first}-{last}) has no frame "
                               "files yet (particles.%04d.ply, .vdb or .obj): nothing to import")
     return bake

@@ -10,15 +10,20 @@
 #   <scene> particles  a vertex-only mesh with `velocity` and `id`, shown as points by a
 #                      Geometry Nodes modifier (Mesh to Points, radius half the spacing)
 #   <stem>             one mesh per other OBJ sequence (every cloth), vertices following frames
+#   <body name>        one object per rigid body: its mesh in the body frame (from the first
+#                      frame's <body name>.%04d.obj, taken back through that frame's transform;
+#                      an empty without body meshes), and its transforms from bodies.%04d.jsonl
+#                      as keyframes (location, rotation_quaternion; linear between frames)
 # and sets the scene's frame rate (1 / frame_dt) and frame range. Every first frame is read
 # before any object is made, so a bad file leaves the scene as it was.
 import math
 
 import bpy
-from mathutils import Matrix, Vector
+import numpy as np
+from mathutils import Matrix, Quaternion, Vector
 
 from . import frame_sequences, materials, mesh_data, obj_frames, ply_points
-from .bake_folder import BakeFolderError
+from .bake_folder import BakeFolderError, read_body_frame
 
 SURFACE_GRID = "surface"  # the level set: signed distance, negative inside; its 0 level is the surface
 
@@ -101,6 +106,11 @@ def read_first_frames(bake, surface_source):
         first["particles"] = ply_points.read_ply_points(bake.particles.path(bake.particles.first))
     for seq in bake.meshes:
         first[seq.stem] = obj_frames.read_obj(seq.path(seq.first))
+    if bake.bodies:
+        first["bodies"] = {f: read_body_frame(bake.bodies.path(f)) for f in bake.bodies.frames}
+    for name, seq in bake.body_meshes.items():
+        if seq:
+            first["body " + name] = obj_frames.read_obj(seq.path(seq.first))
     if surface_source == "AUTO":
         surface_source = "VDB" if has_level_set else ("OBJ" if bake.fluid_obj else "NONE")
     if surface_source == "VDB" and not bake.fluid_vdb:
@@ -115,6 +125,43 @@ def read_first_frames(bake, surface_source):
     if surface_source == "OBJ":
         first["surface"] = obj_frames.read_obj(bake.fluid_obj.path(bake.fluid_obj.first))
     return first, surface_source
+
+
+def _body_objects(bake, first, collection, parent):
+    """One object per rigid body (see the top of this file)."""
+    poses = first.get("bodies", {})
+    for name, seq in bake.body_meshes.items():
+        frames = [f for f in sorted(poses) if name in poses[f]]
+        if not frames:
+            continue
+        data = None
+        if seq is not None and seq.first in poses and name in poses[seq.first]:
+            obj_mesh = first["body " + name]
+            position, orientation = poses[seq.first][name]
+            turn = np.array(Quaternion(orientation).to_matrix(), dtype=np.float64)
+            # World to body frame: R^T (p - x), as rows (p - x) R.
+            obj_mesh.positions = ((obj_mesh.positions.astype(np.float64) - position) @ turn).astype(np.float32)
+            data = bpy.data.meshes.new(name)
+            mesh_data.set_faces(data, obj_mesh)
+            data.polygons.foreach_set("use_smooth", np.zeros(len(data.polygons), dtype=bool))  # flat faces
+            data.materials.append(materials.body(name))
+        obj = _new_object(name, data, collection, parent)
+        obj["seiche_body"] = name
+        obj.rotation_mode = "QUATERNION"
+        previous = None
+        for f in frames:
+            position, orientation = poses[f][name]
+            q = Quaternion(orientation)
+            if previous is not None and previous.dot(q) < 0.0:
+                q.negate()  # the same turn; the nearer sign so that keys interpolate the short way
+            obj.location = position
+            obj.rotation_quaternion = q
+            obj.keyframe_insert("location", frame=f)
+            obj.keyframe_insert("rotation_quaternion", frame=f)
+            previous = q
+        for curve in obj.animation_data.action.fcurves:
+            for key in curve.keyframe_points:
+                key.interpolation = "LINEAR"
 
 
 def set_scene_timing(scene, bake):
@@ -175,6 +222,8 @@ def import_bake(context, bake, surface_source="AUTO", density_volume=False, rend
         frame_sequences.tag(obj, "mesh", seq)
         mesh_data.set_faces(obj.data, first[seq.stem])
         obj.data.materials.append(materials.cloth(seq.stem))
+
+    _body_objects(bake, first, collection, root)
 
     if set_timing:
         set_scene_timing(scene, bake)

@@ -1,6 +1,6 @@
 # The materials the importer gives its objects: water (Principled BSDF, transmission 1,
 # IOR 1.33, a cyan absorption inside (4/m); shadow rays pass straight through, so the floor under
-# the water is lit without caustics, which a path tracer finds only with many samples), cloth (a matte fabric), the fluid's density as a
+# the water is lit without caustics, which a path tracer finds only with many samples), cloth (a matte fabric), rigid bodies (a grey satin), the fluid's density as a
 # volume (Principled Volume reading the "density" grid) and the particles' points.
 import bpy
 
@@ -47,20 +47,25 @@ def water():
     return m
 
 
-def cloth(name):
-    m, bsdf, _ = principled(f"Seiche cloth {name}")
-    bsdf.inputs["Base Color"].default_value = (0.75, 0.22, 0.16, 1.0)
-    bsdf.inputs["Roughness"].default_value = 0.8
-    m.diffuse_color = (0.75, 0.22, 0.16, 1.0)
+def _opaque(name, colour, roughness):
+    """A Principled BSDF of `colour` (RGBA) and `roughness`; the viewport shows the same colour."""
+    m, bsdf, _ = principled(name)
+    bsdf.inputs["Base Color"].default_value = colour
+    bsdf.inputs["Roughness"].default_value = roughness
+    m.diffuse_color = colour
     return m
+
+
+def cloth(name):
+    return _opaque(f"Seiche cloth {name}", (0.75, 0.22, 0.16, 1.0), 0.8)
+
+
+def body(name):
+    return _opaque(f"Seiche body {name}", (0.55, 0.55, 0.6, 1.0), 0.5)
 
 
 def particles():
-    m, bsdf, _ = principled("Seiche particles")
-    bsdf.inputs["Base Color"].default_value = (0.1, 0.35, 0.8, 1.0)
-    bsdf.inputs["Roughness"].default_value = 0.3
-    m.diffuse_color = (0.1, 0.35, 0.8, 1.0)
-    return m
+    return _opaque("Seiche particles", (0.1, 0.35, 0.8, 1.0), 0.3)
 
 
 def density_volume():

@@ -1,7 +1,10 @@
 // Rigid body output: bodies.%04d.jsonl per frame, one JSON object a line per body in scene
 // order: {"name": ..., "position": [x, y, z], "orientation": [w, x, y, z], "velocity": [...],
 // "angular_velocity": [...]} (m, unit quaternion body to world, m/s, rad/s; world frame),
-// written atomically like every frame file. Used by both `seiche run` and `seiche bake`.
+// written atomically like every frame file; and with output.body_meshes (the default) every
+// body's surface in the world as <body name>.%04d.obj (body_surface.hpp: a mesh body's own
+// triangles, a generated mesh for a box, sphere or capsule). Used by both `seiche run` and
+// `seiche bake`.
 #pragma once
 
 #include <memory>

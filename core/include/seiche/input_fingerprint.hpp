@@ -1,4 +1,4 @@
-// The input files of a scene (every cloth's, mesh collider's and mesh shape's OBJ) and their
+// The input files of a scene (every cloth's, mesh collider's, mesh shape's and mesh rigid body's OBJ) and their
 // fingerprints: the size and FNV-1a 64 hash of the bytes the scene loader read, so that what is recorded is what the
 // simulation used. A bake records them in bake.json (bake.hpp); a resume compares the files as
 // the loader reads them again with the record and refuses a missing or changed one, naming it,
@@ -24,7 +24,7 @@ struct InputFile {
   bool operator==(const InputFile&) const = default;
 };
 
-/// The input files of a loaded scene, in scene order (cloths, colliders, then shapes), with the
+/// The input files of a loaded scene, in scene order (cloths, colliders, shapes, then rigid bodies), with the
 /// fingerprints of the bytes the loader read. A definition made in code without a loaded mesh
 /// has its file read and hashed here.
 std::vector<InputFile> scene_input_files(const SceneDef& scene);

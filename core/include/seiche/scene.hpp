@@ -18,6 +18,9 @@ using Vec3 = std::array<float, 3>;
 
 struct ClothMesh;      // core/src/families/cloth/cloth_mesh.hpp
 struct ClothTopology;  // core/src/families/cloth/cloth_mesh.hpp
+namespace rigid {
+struct BodyMesh;  // core/src/families/rigid/body_mesh.hpp
+}
 struct ShapeSites;     // core/src/families/shape/shape_sites.hpp
 
 /// "solver": time stepping and the fluid solver's numerical settings.
@@ -80,13 +83,22 @@ struct FluidDef {
   Vec3 velocity{0.0f, 0.0f, 0.0f};  ///< m/s, initial velocity of every particle of the block
 };
 
+/// "mesh" of a cloth: a triangle mesh read from an OBJ file (polygons are fanned into
+/// triangles), placed by x_world = x_file * scale + translate.
+struct ClothMeshDef {
+  std::string file;                  ///< required; relative paths are relative to the scene file
+  Vec3 translate{0.0f, 0.0f, 0.0f};  ///< m
+  float scale = 1.0f;                ///< > 0
+};
+
 /// One entry of "rigid_bodies": a rigid body with its own state (position, orientation, linear
 /// and angular velocity; core/src/families/rigid/), not particles. Its mass and its inertia
 /// tensor (diagonal in the body frame) follow from shape, size and density. At rest orientation
-/// a box's edges lie along x, y, z and a capsule's axis along y.
+/// a box's edges lie along x, y, z, a capsule's axis along y, and a mesh lies as in its file (its
+/// body frame is its principal axes: body_mesh.hpp).
 struct RigidBodyDef {
   std::string name;                   ///< required, unique ignoring case, not "world"
-  std::string shape = "box";          ///< "box", "sphere" or "capsule"
+  std::string shape = "box";          ///< "box", "sphere", "capsule" or "mesh"
   Vec3 size{0.1f, 0.1f, 0.1f};        ///< box: edge lengths along the body's x, y, z (m, > 0)
   float radius = 0.05f;               ///< sphere, capsule (m, > 0)
   float length = 0.1f;                ///< capsule: length of its cylinder, along the body's y (m, > 0)
@@ -97,6 +109,12 @@ struct RigidBodyDef {
   Vec3 velocity{0.0f, 0.0f, 0.0f};    ///< m/s, of the centre of mass
   Vec3 angular_velocity{0.0f, 0.0f, 0.0f};  ///< rad/s, world frame
   bool fixed = false;                 ///< never moves (infinite mass): an anchor for joints
+  /// mesh: a closed OBJ (file and scale; translate is not a key: `position` places the mesh's
+  /// centre of mass); its mass properties from the mesh (core/src/families/rigid/body_mesh.hpp)
+  ClothMeshDef mesh;
+  /// Not a key: a mesh body's mesh as the loader read it (once), in the body frame with its mass
+  /// properties. Null for the other shapes or a definition made in code (then read from the file).
+  std::shared_ptr<const rigid::BodyMesh> loaded_mesh;
 };
 
 /// One entry of "joints": a joint between two rigid bodies, or a body and the world (XPBD with
@@ -158,14 +176,6 @@ struct SheetDef {
   std::array<float, 2> size{1.0f, 1.0f};  ///< m, > 0
   std::array<int, 2> resolution{32, 32};  ///< vertices per side, 2..4096
   std::string plane = "xz";  ///< two distinct axes of x, y, z: "xz" is horizontal, "xy" upright
-};
-
-/// "mesh" of a cloth: a triangle mesh read from an OBJ file (polygons are fanned into
-/// triangles), placed by x_world = x_file * scale + translate.
-struct ClothMeshDef {
-  std::string file;                  ///< required; relative paths are relative to the scene file
-  Vec3 translate{0.0f, 0.0f, 0.0f};  ///< m
-  float scale = 1.0f;                ///< > 0
 };
 
 /// One entry of "shapes": a body of particles on a cubic lattice (a box filled as a fluid block
@@ -261,6 +271,7 @@ struct OutputDef {
   bool vdb_points = false;   ///< "points": VDB Points with attributes v and id
   bool vdb_velocity = false; ///< "v": velocity grid for motion blur
   bool mesh = false;         ///< bake: <name>.%04d.obj surface mesh per frame
+  bool body_meshes = true;   ///< <body name>.%04d.obj: every rigid body's surface in the world per frame
   float voxel_size = 0.0f;   ///< m; 0 = automatic (half the fluid spacing)
   bool anisotropic = false;  ///< Yu & Turk 2013 anisotropic surface instead of spheres
   bool half_float = false;   ///< store float grids as 16-bit halves

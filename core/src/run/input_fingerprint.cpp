@@ -1,5 +1,5 @@
 // Input files and their fingerprints (the contract is in input_fingerprint.hpp). The hash is the
-// one the loader computed over the bytes it read (ClothMesh::source_fnv1a64), so the record is
+// one the loader computed over the bytes it read (ClothMesh::source_fnv1a64, BodyMesh's), so the record is
 // what the simulation used, not a second read that could see another file.
 #include "seiche/input_fingerprint.hpp"
 
@@ -11,6 +11,7 @@
 #include <system_error>
 
 #include "../families/cloth/cloth_mesh.hpp"
+#include "../families/rigid/body_mesh.hpp"
 #include "../families/shape/shape_sites.hpp"
 #include "seiche/checkpoint.hpp"
 
@@ -58,6 +59,11 @@ std::vector<InputFile> scene_input_files(const SceneDef& scene) {
     const ShapeDef& s = scene.shapes[k];
     if (s.kind == ShapeDef::Kind::Mesh)
       files.push_back(fingerprint(fmt::format("shapes[{}].mesh.file", k), s.mesh.file, s.loaded_sites.get()));
+  }
+  for (std::size_t k = 0; k < scene.rigid_bodies.size(); ++k) {
+    const RigidBodyDef& b = scene.rigid_bodies[k];
+    if (b.shape == "mesh")
+      files.push_back(fingerprint(fmt::format("rigid_bodies[{}].mesh.file", k), b.mesh.file, b.loaded_mesh.get()));
   }
   return files;
 }

@@ -131,6 +131,9 @@ const KeyTable<OutputDef>& output_keys() {
           .valid_note("each of `\"surface\"`, `\"density\"`, `\"points\"`, `\"v\"`, at most once")
           .doc("bake: the grids of `<name>.%04d.vdb`; `[]` writes no .vdb files"),
       K("mesh", &OutputDef::mesh).doc("bake: `<name>.%04d.obj`, the fluid surface as a triangle mesh"),
+      K("body_meshes", &OutputDef::body_meshes)
+          .doc("`<body name>.%04d.obj` per rigid body: its surface in the world (a mesh body's triangles; a "
+               "generated mesh for a box, sphere or capsule), next to `bodies.%04d.jsonl`"),
       K("voxel_size", &OutputDef::voxel_size, Range::at_least(0))
           .unit("m")
           .default_text("`0` (automatic)")

@@ -1,11 +1,8 @@
 // Signed distance field of a closed triangle mesh on a dense grid (contract in mesh_sdf.hpp).
 //
 // Method:
-// 1. Closed check. The faces as read are fanned into triangles (triangles with a repeated vertex
-//    are dropped: they have no area in any projection). Every undirected edge must belong to
-//    exactly two of them. This uses the faces rather than `mesh.triangles` because the reader
-//    drops zero-area triangles from `triangles`, and dropping a sliver from a closed mesh would
-//    open it (its points still lie on its neighbours' edges, so distances do not need it).
+// 1. Closed check (closed_mesh.hpp): the faces fanned into triangles, every undirected edge in
+//    exactly two of them.
 // 2. Distance, near the surface. Each triangle visits the samples in its bounding box grown by
 //    1.5 voxels and keeps, per sample, the closest triangle and the squared distance to it. So
 //    every sample within 1.5 voxels of the mesh gets the exact distance. Ties go to the lower
@@ -50,6 +47,7 @@
 #include <limits>
 #include <stdexcept>
 
+#include "families/closed_mesh.hpp"
 #include "seiche/scene_loader.hpp"
 
 namespace seiche {
@@ -185,65 +183,10 @@ void build_mesh_sdf(const ClothMesh& mesh, float voxel, float band, const std::s
   if (!(band >= 0.0f) || !std::isfinite(band)) {
     throw std::invalid_argument(fmt::format("build_mesh_sdf: band must be >= 0, got {}", band));
   }
-  const std::size_t nv = mesh.vertex_count();
-
-  // ---- 1. the closed triangle set and its check -------------------------------------------------
-  std::vector<Tri> closed;  // fanned faces without repeated vertices
-  auto add_closed = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c) {
-    if (a >= nv || b >= nv || c >= nv) {
-      throw std::invalid_argument("build_mesh_sdf: a vertex index is out of range");
-    }
-    if (a != b && b != c && a != c) closed.push_back({a, b, c});
-  };
-  if (mesh.face_start.size() >= 2) {
-    for (std::size_t f = 0; f + 1 < mesh.face_start.size(); ++f) {
-      const std::uint32_t begin = mesh.face_start[f], end = mesh.face_start[f + 1];
-      for (std::uint32_t c = begin + 1; c + 1 < end; ++c) {
-        add_closed(mesh.corner_vertex[begin], mesh.corner_vertex[c], mesh.corner_vertex[c + 1]);
-      }
-    }
-  } else {
-    for (const Tri& t : mesh.triangles) add_closed(t[0], t[1], t[2]);
-  }
-  if (closed.empty()) throw SceneError(file, json_path, "the mesh has no triangles");
-
-  bool consistent = true;  // every edge used once in each direction
-  {
-    std::vector<std::uint64_t> directed;  // (min << 33 | max << 1 | forward)
-    directed.reserve(3 * closed.size());
-    for (const Tri& t : closed) {
-      for (int e = 0; e < 3; ++e) {
-        const std::uint64_t a = t[e], b = t[(e + 1) % 3];
-        directed.push_back((std::min(a, b) << 33) | (std::max(a, b) << 1) | (a < b ? 1u : 0u));
-      }
-    }
-    std::sort(directed.begin(), directed.end());
-    std::size_t open = 0, first_count = 0;
-    std::uint64_t first_open = 0;
-    for (std::size_t r = 0; r < directed.size();) {
-      std::size_t s = r;
-      while (s < directed.size() && (directed[s] >> 1) == (directed[r] >> 1)) ++s;
-      if (s - r != 2) {
-        if (open == 0) {
-          first_open = directed[r] >> 1;
-          first_count = s - r;
-        }
-        ++open;
-      } else if ((directed[r] & 1) == (directed[r + 1] & 1)) {
-        consistent = false;
-      }
-      r = s;
-    }
-    if (open > 0) {
-      throw SceneError(file, json_path,
-                       fmt::format("the mesh must be closed (every edge shared by exactly "
-                                   "two triangles): the edge between vertices {} and {} (1-based) "
-                                   "belongs to {} triangle{}; {} such edge{}",
-                                   (first_open >> 32) + 1, (first_open & 0xffffffffu) + 1,
-                                   first_count, first_count == 1 ? "" : "s", open,
-                                   open == 1 ? "" : "s"));
-    }
-  }
+  // ---- 1. the closed triangle set and its check (closed_mesh.hpp) -------------------------------
+  const ClosedTriangles closed_set = closed_triangles(mesh, file, json_path);
+  const std::vector<Tri>& closed = closed_set.triangles;
+  const bool consistent = closed_set.consistent;
 
   // Triangles for distances: those with an area (a sliver's points lie on its neighbours' edges).
   std::vector<DistanceTriangle> tris;
@@ -443,7 +386,7 @@ void build_mesh_sdf(const ClothMesh& mesh, float voxel, float band, const std::s
   // count) changes by c.
   std::vector<std::int32_t> crossing(count, 0);
   {
-    std::vector<Lattice2> lattice(nv);
+    std::vector<Lattice2> lattice(mesh.vertex_count());
     const double to_lattice = kLatticeUnits / h;
     for (const Tri& t : closed) {
       for (std::uint32_t v : t) {

@@ -1,10 +1,12 @@
-// bodies.%04d.jsonl: every rigid body's transform and velocities per frame (body_exporter.hpp).
+// bodies.%04d.jsonl: every rigid body's transform and velocities per frame, and with
+// output.body_meshes each body's surface in the world as <body name>.%04d.obj (body_exporter.hpp).
 #include "seiche/body_exporter.hpp"
 
 #include <fmt/format.h>
 
 #include <cmath>
 
+#include "body_surface.hpp"
 #include "seiche/output_files.hpp"
 
 namespace seiche {
@@ -27,12 +29,18 @@ std::string json_numbers(const std::array<double, N>& values) {
 
 class BodyExporter final : public FrameExporter {
  public:
-  explicit BodyExporter(const SceneDef& scene) : scene_(scene) {}
+  explicit BodyExporter(const SceneDef& scene) : scene_(scene) {
+    if (scene.output.body_meshes)
+      for (const RigidBodyDef& b : scene.rigid_bodies) surfaces_.push_back(rigid::body_surface(b));
+  }
 
   std::string name() const override { return "bodies"; }
 
   std::vector<std::filesystem::path> files(int frame) const override {
-    return {frame_file_name(kStem, frame, "jsonl")};
+    std::vector<std::filesystem::path> names{frame_file_name(kStem, frame, "jsonl")};
+    for (std::size_t k = 0; k < surfaces_.size(); ++k)
+      names.push_back(frame_file_name(scene_.rigid_bodies[k].name, frame, "obj"));
+    return names;
   }
 
   std::uint64_t write_frame(const FrameView& frame, const std::filesystem::path& dir) override {
@@ -45,11 +53,19 @@ class BodyExporter final : public FrameExporter {
   }
 
   std::vector<EncodedFile> encode_frame(const FrameView& frame) const override {
-    return {{frame_file_name(kStem, frame.frame, "jsonl"), encode_bodies_jsonl(scene_, frame.bodies)}};
+    std::vector<EncodedFile> files{
+        {frame_file_name(kStem, frame.frame, "jsonl"), encode_bodies_jsonl(scene_, frame.bodies)}};
+    for (std::size_t k = 0; k < surfaces_.size() && k < frame.bodies.size(); ++k) {
+      const std::string& body = scene_.rigid_bodies[k].name;
+      files.push_back(
+          {frame_file_name(body, frame.frame, "obj"), rigid::encode_body_obj(body, surfaces_[k], frame.bodies[k])});
+    }
+    return files;
   }
 
  private:
   SceneDef scene_;
+  std::vector<rigid::BodySurface> surfaces_;  // body frame; empty without output.body_meshes
 };
 
 }  // namespace

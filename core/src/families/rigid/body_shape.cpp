@@ -1,6 +1,8 @@
 // Mass properties of the rigid bodies' shapes (the closed forms are in body_shape.hpp).
 #include "body_shape.hpp"
 
+#include "body_mesh.hpp"
+
 #include <numbers>
 
 namespace seiche::rigid {
@@ -8,15 +10,21 @@ namespace seiche::rigid {
 BodyShape body_shape_of(std::string_view name) {
   if (name == "sphere") return BodyShape::Sphere;
   if (name == "capsule") return BodyShape::Capsule;
+  if (name == "mesh") return BodyShape::Mesh;
   return BodyShape::Box;
 }
 
 ShapeDims body_shape_def(const RigidBodyDef& def) {
-  return {body_shape_of(def.shape),
-          {double(def.size[0]), double(def.size[1]), double(def.size[2])},
-          double(def.radius),
-          double(def.length),
-          double(def.density)};
+  ShapeDims d{body_shape_of(def.shape),
+              {double(def.size[0]), double(def.size[1]), double(def.size[2])},
+              double(def.radius),
+              double(def.length),
+              double(def.density),
+              nullptr};
+  if (d.shape == BodyShape::Mesh)
+    d.mesh = def.loaded_mesh ? def.loaded_mesh
+                             : std::make_shared<const BodyMesh>(read_body_mesh(def.mesh, "rigid_bodies[].mesh"));
+  return d;
 }
 
 MassProperties mass_properties(const ShapeDims& d) {
@@ -47,6 +55,14 @@ MassProperties mass_properties(const ShapeDims& d) {
       const double across = cylinder * (h * h / 12.0 + r * r / 4.0) + caps * (0.4 * r * r + h * h / 4.0 + 0.375 * h * r);
       p.inertia = {across, along, across};
       p.extent = 0.5 * h + r;
+      break;
+    }
+    case BodyShape::Mesh: {
+      if (!d.mesh) break;  // no mesh: no mass (the reader always loads one)
+      p.mass = d.density * d.mesh->volume;
+      p.inertia = d.density * d.mesh->unit_inertia;
+      p.extent = d.mesh->extent;
+      p.principal = d.mesh->principal;
       break;
     }
   }

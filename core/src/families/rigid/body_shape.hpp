@@ -9,9 +9,12 @@
 //     I_xx = I_zz = m_c (h^2/12 + r^2/4) + m_s (2/5 r^2 + h^2/4 + 3/8 h r)
 //   (each cap about its own centroid, 83/320 m r^2 across, moved by the parallel-axis theorem to
 //   the body's centre; the terms collect to the line above).
-// A mesh shape (inertia from a closed triangle mesh) is a later step (issue 17).
+//   mesh: m = rho V and the principal moments rho I_unit of the closed mesh's volume integrals
+//   (body_mesh.hpp), in the body frame of its principal axes, turned by `principal` from the
+//   mesh's own axes.
 #pragma once
 
+#include <memory>
 #include <string_view>
 
 #include "rigid_math.hpp"
@@ -19,9 +22,11 @@
 
 namespace seiche::rigid {
 
-enum class BodyShape { Box, Sphere, Capsule };
+enum class BodyShape { Box, Sphere, Capsule, Mesh };
 
-/// "box", "sphere" or "capsule" (the key table allows no other); Box for anything else.
+struct BodyMesh;
+
+/// "box", "sphere", "capsule" or "mesh" (the key table allows no other); Box for anything else.
 BodyShape body_shape_of(std::string_view name);
 
 struct ShapeDims {
@@ -30,14 +35,17 @@ struct ShapeDims {
   double radius = 0.0;  ///< sphere, capsule (m)
   double length = 0.0;  ///< capsule cylinder (m)
   double density = 0.0; ///< kg/m^3
+  std::shared_ptr<const BodyMesh> mesh = nullptr;  ///< mesh: its volume integrals
 };
 
 struct MassProperties {
   double mass = 0.0;  ///< kg
   Vec3d inertia;      ///< kg m^2, the principal moments along the body's x, y, z
   double extent = 0.0;  ///< m, the distance from the centre to the farthest point of the shape
+  Quatd principal;      ///< the body frame's rotation from the shape's rest axes (a mesh's file axes)
 };
 
+/// The shape of `def`; a mesh's from def.loaded_mesh, else read from its file now.
 ShapeDims body_shape_def(const RigidBodyDef& def);
 MassProperties mass_properties(const ShapeDims& dims);
 

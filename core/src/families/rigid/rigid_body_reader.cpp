@@ -1,10 +1,14 @@
 // The "rigid_bodies" section: the key table of a rigid body, its reader, and the rules across
 // keys and sections (the sizes its shape uses and no others, a name no other body has, a centre
-// inside the domain, an orientation axis that is not zero).
+// inside the domain, an orientation axis that is not zero). A mesh body's OBJ is read here, once,
+// so that an open or degenerate mesh is reported before anything runs, and its mass properties
+// and body-frame mesh are kept in the definition (body_mesh.hpp).
 #include <fmt/format.h>
 
 #include <cmath>
+#include <memory>
 
+#include "body_mesh.hpp"
 #include "body_shape.hpp"
 #include "rigid_reader.hpp"
 #include "scene/output_name.hpp"
@@ -27,10 +31,12 @@ const KeyTable<RigidBodyDef>& rigid_body_keys() {
           .required()
           .valid_note("1 to 64 ASCII letters, digits, `_`, `-`, `.`; not starting with `.` or `-`; not `world`; "
                       "unique ignoring case")
-          .doc("names the body for joints and in `bodies.%04d.jsonl`"),
+          .doc("names the body for joints, in `bodies.%04d.jsonl` and its `<name>.%04d.obj` (not a cloth's name, "
+               "nor the scene's with a fluid)"),
       K("shape", &RigidBodyDef::shape)
-          .choices({"box", "sphere", "capsule"})
-          .doc("a box (edges along the body's x, y, z), a sphere, or a capsule (axis along the body's y)"),
+          .choices({"box", "sphere", "capsule", "mesh"})
+          .doc("a box (edges along the body's x, y, z), a sphere, a capsule (axis along the body's y), or a closed "
+               "OBJ mesh (`mesh`)"),
       K("size", &RigidBodyDef::size)
           .unit("m")
           .valid_note("every component > 0; box only")
@@ -39,18 +45,23 @@ const KeyTable<RigidBodyDef>& rigid_body_keys() {
       K("length", &RigidBodyDef::length, Range::above(0))
           .unit("m")
           .doc("capsule only: the length of its cylinder (the caps add a radius at each end)"),
+      nested<RigidBodyDef>("mesh", "object")
+          .default_text("–")
+          .valid_note("see below; mesh only")
+          .doc("the closed OBJ mesh of a `mesh` body: `file` and `scale`"),
       K("density", &RigidBodyDef::density, Range::left_open(0, kMaxDensity))
           .unit("kg/m³")
-          .doc("mass and inertia tensor follow from it, the shape and the size (closed forms)"),
+          .doc("mass and inertia tensor follow from it, the shape and the size (closed forms; a mesh's volume "
+               "integrals)"),
       K("position", &RigidBodyDef::position)
           .required()
           .unit("m")
           .valid_note("inside the domain")
-          .doc("the centre of mass at the start"),
+          .doc("the centre of mass at the start (a mesh's centre of mass is put there)"),
       K("axis", &RigidBodyDef::axis)
           .valid_note("not zero when `angle` is not 0")
           .doc("orientation at the start: the body is turned by `angle` about this axis (world frame) from its rest "
-               "pose"),
+               "pose (a mesh: as in its file, turned about its centre of mass)"),
       K("angle", &RigidBodyDef::angle).unit("degrees").doc("orientation at the start: the angle about `axis`"),
       K("velocity", &RigidBodyDef::velocity).unit("m/s").doc("initial velocity of the centre of mass"),
       K("angular_velocity", &RigidBodyDef::angular_velocity)
@@ -61,16 +72,31 @@ const KeyTable<RigidBodyDef>& rigid_body_keys() {
   return keys;
 }
 
+// A mesh body's "mesh": the OBJ and its scale. No "translate": `position` places the body.
+const KeyTable<ClothMeshDef>& body_mesh_keys() {
+  using M = Key<ClothMeshDef>;
+  static const KeyTable<ClothMeshDef> keys{
+      M("file", &ClothMeshDef::file)
+          .required()
+          .valid_note("a closed OBJ file, wound outward")
+          .doc("relative paths are relative to the scene file's folder"),
+      M("scale", &ClothMeshDef::scale, Range::above(0)).doc("the factor of x_file"),
+  };
+  return keys;
+}
+
 // A size key the body's shape does not use is an error, not silently ignored.
 void reject_unused_size_keys(JsonReader& r, const RigidBodyDef& b) {
   const BodyShape shape = body_shape_of(b.shape);
   const bool uses_size = shape == BodyShape::Box;
-  const bool uses_radius = shape != BodyShape::Box;
+  const bool uses_radius = shape == BodyShape::Sphere || shape == BodyShape::Capsule;
   const bool uses_length = shape == BodyShape::Capsule;
   const auto reject = [&](const char* key, bool used) {
     if (!used && r.has(key)) r.fail_at(key, fmt::format("a {} has no \"{}\"", b.shape, key));
   };
+  const bool uses_mesh = shape == BodyShape::Mesh;
   reject("size", uses_size);
+  reject("mesh", uses_mesh);
   reject("radius", uses_radius);
   reject("length", uses_length);
 }
@@ -78,7 +104,13 @@ void reject_unused_size_keys(JsonReader& r, const RigidBodyDef& b) {
 void read_rigid_body(JsonReader r, SceneDef& scene) {
   RigidBodyDef b;
   read_keys(r, rigid_body_keys(), b);
+  auto mesh = r.optional_object("mesh");
   reject_unused_size_keys(r, b);
+  if (body_shape_of(b.shape) == BodyShape::Mesh) {
+    if (!mesh) r.fail_at("shape", "is \"mesh\" but the body has no \"mesh\" object (its OBJ file)");
+    b.mesh = read_object(*mesh, body_mesh_keys());
+    if (b.mesh.file.empty()) mesh->fail_at("file", "must not be empty");
+  }
   if (const std::string problem = output_name_problem(b.name); !problem.empty()) r.fail_at("name", problem);
   if (output_name_key(b.name) == "world")
     r.fail_at("name", "\"world\" is what a joint's body_a names the world by; give the body another name");
@@ -94,14 +126,40 @@ void read_rigid_body(JsonReader r, SceneDef& scene) {
   scene.rigid_bodies.push_back(b);
 }
 
+// With output.body_meshes a body writes <name>.%04d.obj: not a name whose .obj files another
+// output writes (the fluid's, named after the scene; a cloth's), compared ignoring case.
+void check_body_obj_name(const SceneDef& scene, const RigidBodyDef& b, const std::string& file,
+                         const std::string& path) {
+  if (!scene.output.body_meshes) return;
+  const std::string key = output_name_key(b.name);
+  std::string owner;
+  if (!scene.fluids.empty() && key == output_name_key(scene.name))
+    owner = fmt::format("name (\"{}\", the scene's name, which names the fluid's files)", scene.name);
+  for (std::size_t c = 0; c < scene.cloths.size() && owner.empty(); ++c)
+    if (key == output_name_key(scene.cloths[c].name))
+      owner = fmt::format("{}.name (\"{}\")", element_path("cloths", c), scene.cloths[c].name);
+  if (!owner.empty())
+    fail(file, path + ".name",
+         fmt::format("\"{}\" writes the same files ({}.%04d.obj) as {} (output names are compared ignoring case: "
+                     "case-folding file systems); give the body another name, or set output.body_meshes to false",
+                     b.name, b.name, owner));
+}
+
 void check_rigid_bodies(SceneDef& scene, const std::string& file) {
   for (std::size_t k = 0; k < scene.rigid_bodies.size(); ++k) {
-    const RigidBodyDef& b = scene.rigid_bodies[k];
+    RigidBodyDef& b = scene.rigid_bodies[k];
     const std::string path = element_path("rigid_bodies", k);
     for (std::size_t j = 0; j < k; ++j)
       if (output_name_key(scene.rigid_bodies[j].name) == output_name_key(b.name))
         fail(file, path + ".name",
              fmt::format("\"{}\" is also the name of rigid_bodies[{}] (names are compared ignoring case)", b.name, j));
+    check_body_obj_name(scene, b, file, path);
+    if (body_shape_of(b.shape) == BodyShape::Mesh) {
+      // Mesh paths become absolute (a resumed bake may run elsewhere); the OBJ is read once.
+      b.mesh.file = resolve_mesh_path(b.mesh.file, scene.base_dir);
+      check_mesh_file(b.mesh.file, file, path + ".mesh.file");
+      b.loaded_mesh = std::make_shared<const rigid::BodyMesh>(rigid::read_body_mesh(b.mesh, path + ".mesh"));
+    }
     const MassProperties m = mass_properties(body_shape_def(b));
     if (!(m.mass >= kMinBodyMass))
       fail(file, path + ".density",
@@ -116,9 +174,13 @@ void check_rigid_bodies(SceneDef& scene, const std::string& file) {
 }  // namespace
 
 SceneSection rigid_bodies_section() {
-  return {"rigid_bodies", true, "rigid bodies (box, sphere, capsule) with their own position and orientation",
-          read_rigid_body, check_rigid_bodies,
-          [] { return std::vector<KeyTableDoc>{{"rigid_bodies", key_docs(rigid_body_keys())}}; }};
+  return {"rigid_bodies", true, "rigid bodies (box, sphere, capsule, OBJ mesh) with their own position and orientation",
+          read_rigid_body, check_rigid_bodies, [] {
+            std::vector<KeyDoc> mesh;
+            append_prefixed(mesh, "mesh", key_docs(body_mesh_keys()));
+            return std::vector<KeyTableDoc>{{"rigid_bodies", key_docs(rigid_body_keys())},
+                                            {"rigid_body_mesh", std::move(mesh)}};
+          }};
 }
 
 }  // namespace seiche::detail

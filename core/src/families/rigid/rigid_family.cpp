@@ -55,8 +55,10 @@ std::vector<RigidBody> make_bodies(const SceneDef& scene, std::vector<double>& e
   std::vector<RigidBody> bodies;
   for (const RigidBodyDef& d : scene.rigid_bodies) {
     const rigid::MassProperties m = rigid::mass_properties(rigid::body_shape_def(d));
+    // The turn from the rest pose, after the body frame's own turn from the shape's rest axes.
     const Quatd q = rigid::rotation_quaternion(double(d.angle) * kRadiansPerDegree *
-                                               rigid::normalized_or_zero(to_d(d.axis)));
+                                               rigid::normalized_or_zero(to_d(d.axis))) *
+                    m.principal;
     bodies.push_back(rigid::make_body(to_d(d.position), q, to_d(d.velocity), to_d(d.angular_velocity), m.mass,
                                       m.inertia, d.fixed));
     extent.push_back(m.extent);
