@@ -97,6 +97,11 @@ struct RigidBodyDef {
   Vec3 velocity{0.0f, 0.0f, 0.0f};    ///< m/s, of the centre of mass
   Vec3 angular_velocity{0.0f, 0.0f, 0.0f};  ///< rad/s, world frame
   bool fixed = false;                 ///< never moves (infinite mass): an anchor for joints
+  /// Contacts with the domain's walls and the colliders (families/rigid/world_contacts.hpp); each
+  /// coefficient mixed with the surface's `friction` as sqrt(mu_body mu_surface).
+  float friction = 0.5f;              ///< static (Coulomb) friction coefficient (>= 0)
+  float dynamic_friction = 0.4f;      ///< dynamic (sliding) friction coefficient (>= 0)
+  float restitution = 0.0f;           ///< the share of the normal speed a bounce keeps, in [0, 1]
 };
 
 /// One entry of "joints": a joint between two rigid bodies, or a body and the world (XPBD with
