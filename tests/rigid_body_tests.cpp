@@ -136,7 +136,8 @@ TEST(RigidBody, FreeFallingSpinningBoxKeepsEnergyAndAngularMomentum) {
   }
   const double mass = 4.0;
   EXPECT_LT(worst, 1.01 * mass * 9.81 * 9.81 * h * t / 2 / bodies.energy());
-  EXPECT_EQ(sim.pipeline(), (std::vector<std::string>{"predict", "body predict", "collisions", "update", "body update"}));
+  EXPECT_EQ(sim.pipeline(), (std::vector<std::string>{"predict", "body predict", "body contacts", "collisions", "update",
+                                                       "body update", "body contact velocities"}));
 }
 
 // Torque-free: a spin about the intermediate principal axis (y of the 0.4 x 0.2 x 0.1 box:

@@ -63,7 +63,7 @@ const KeyTable<RigidBodyDef>& rigid_body_keys() {
       K("dynamic_friction", &RigidBodyDef::dynamic_friction, Range::at_least(0))
           .doc("sliding friction of those contacts, mixed with the surface's `friction` the same way"),
       K("restitution", &RigidBodyDef::restitution, Range::closed(0, 1))
-          .doc("the share of its normal speed a bounce keeps (0: no bounce; none below 2 |g| h, the "
+          .doc("the share of its normal speed a bounce keeps (0: no bounce; none below 2 g h, the "
                "speed a substep of gravity gives)"),
   };
   return keys;

@@ -1,30 +1,44 @@
 // Contacts of rigid bodies with the static world (world_surfaces.hpp), with Coulomb friction and
-// restitution, as in Müller et al. 2020, sections 3.5-3.6.
+// restitution, after Müller et al. 2020, sections 3.5-3.6.
 //
 // Contact points, in the body frame, each the centre of a ball of radius rho: a box's 8
 // corners (rho = 0), a sphere's centre (rho = its radius), a capsule's two cap centres (rho = its
-// radius). Every iteration, for every body, point and surface in that order (serial: the same
-// bits at any thread count), with the point's centre c = x + R r_c:
-//   depth d of the ball in the surface, outward normal n (a contact where d > 0);
-//   the body's contact point P = c - rho n, lever r = P - x, w = 1/m + (r x n)^T I^-1 (r x n)
-//   normal (zero compliance):  dlambda_n = d / w,  lambda_n += dlambda_n,  the body moved by the
-//                              impulse dlambda_n n at r (body_correction.hpp)
-//   static friction: dp = P - P_prev (P_prev = x_prev + R(q_prev) r_local: where the same body
-//                    point was when the substep began; the world does not move),
-//                    dp_t = dp - (dp.n) n,  t = dp_t / |dp_t|,  w_t as w along t,
-//                    dlambda_t = |dp_t| / w_t;  if lambda_t + dlambda_t < mu_s lambda_n, the
-//                    impulse -dlambda_t t at r undoes the tangential motion (the point sticks),
-//                    lambda_t += dlambda_t; else it slides (the velocity pass below)
-// lambda_n and lambda_t are per (body, point, surface) and reset when a substep begins.
-// After the velocity update (v, omega from the positions), for every contact of the substep
-// (lambda_n > 0), with r = R r_local and v_c = v + omega x r, v_n = v_c.n, v_t = v_c - v_n n:
-//   dynamic friction: dv = -v_t / |v_t| min(mu_d lambda_n w_t / h, |v_t|)   (the impulse
-//                     mu_d lambda_n / h: mu_d times the normal impulse of the substep, which moves
-//                     the point by that impulse times w_t; the paper's eq. 30)
-//   restitution:      dv += n (-v_n + max(-e vbar_n, 0)), vbar_n = n.(vbar + omegabar x r) from
-//                     the velocities before the substep; e = 0 where |vbar_n| <= 2 |g| h (a body
-//                     at rest on a surface gains g h a substep: no bounce from that, no jitter)
-//   applied as the impulse p = dv / w (w along dv): v += p / m, omega += I^-1 (r x p).
+// radius). Every iteration, body by body in scene order (serial: the same bits at any thread
+// count), with a point's centre c = x + R r_c against each surface:
+//   normals: depth d of the ball in the surface, outward normal n (a contact where d > 0); the
+//     body's contact point P = c - rho n, lever r = P - x, w = 1/m + (r x n)^T I^-1 (r x n);
+//     dlambda_n = d / w (zero compliance), the impulse dlambda_n n at r (body_correction.hpp).
+//     All of a body's points from the same pose, applied together (Jacobi), and again until no
+//     point is deeper than 1e-12 m (at most 32 passes). One point after the other (the paper's
+//     Gauss-Seidel) turns the body at each corner, which the next corner undoes: a resting box
+//     then slides on its corners' tangential motion, and its normal multipliers overshoot; a
+//     face's corners pushed together move it straight out.
+//   static friction, per surface, in the cone of the body and that surface together: with
+//     lambda_n the sum of its points' normal multipliers of the substep and lambda_t the vector
+//     sum of the friction impulses so far, a correction is applied only where
+//     |lambda_t + its impulse| < mu_s lambda_n. The slip of a body point since the substep began:
+//     dp = P - P_prev (P_prev = x_prev + R(q_prev) r_local; the world does not move),
+//     dp_t = dp - (dp.n) n, t = dp_t / |dp_t|.
+//     - A face (3 points or more on the surface) cannot tip: its normals hold it. One constraint
+//       at the points' centre (weighted by their lambda_n), which moves the body along the
+//       surface and turns it about n only: w_t = 1/m + ((r x t).n)^2 n^T I^-1 n, the impulse
+//       -|dp_t| / w_t t. Then its turn about n since the substep began, theta = n.log(q q_prev^-1),
+//       undone by the angular impulse -theta / (n^T I^-1 n) where its sum stays below
+//       mu_s lambda_n rho_patch (rho_patch: the points' weighted mean distance from the centre).
+//     - Else (a ball, an edge, a corner) each touching point's impulse -|dp_t| / w_t t (w_t as w,
+//       along t), all from the same pose, applied together.
+//   (lambda_n, lambda_t and the twist are reset when a substep begins.)
+// After the velocity update (v, omega from the positions), per surface the body touched in the
+// substep (lambda_n > 0), with v_c = v + omega x r at a point, v_n = v_c.n, v_t = v_c - v_n n:
+//   restitution, point by point: dv = n (-v_n + max(-e vbar_n, 0)), vbar_n = n.(vbar + omegabar x r)
+//     from the velocities before the substep; e = 0 where |vbar_n| <= 2 |g| h (a body at rest
+//     gains g h a substep: no bounce from that, no jitter); applied as the impulse p = dv / w
+//     (w along dv): v += p / m, omega += I^-1 (r x p).
+//   dynamic friction (the paper's eq. 30, as an impulse): the speed change along -v_t is
+//     min(mu_d lambda_n w_t / h, |v_t|): the impulse mu_d lambda_n / h (mu_d times the substep's
+//     normal impulse) at most. A face at its centre with its w_t (above), and its spin about n
+//     slowed by at most mu_d lambda_n rho_patch n^T I^-1 n / h; else point by point with its own
+//     lambda_n.
 // Materials: the body's static friction mu_s, dynamic mu_d and restitution e; a surface has one
 // Coulomb coefficient mu_c (the domain's or the collider's `friction`), mixed with the body's as
 // the geometric mean, mu = sqrt(mu_body mu_c): a frictionless side (0) gives no friction, equal
