@@ -17,6 +17,9 @@ namespace {
 // mass w): 0.3 for a 0.2 x 0.1 x 0.2 box, so a few passes reach it.
 constexpr double kResolved = 1e-12;
 constexpr int kNormalPasses = 32;
+// A body is tested point by point against the surfaces its bounding ball, grown by this factor,
+// reaches (the ball of its extent holds every contact point's ball).
+constexpr double kNearMargin = 1.5;
 
 double mixed(double body, double surface) { return std::sqrt(body * surface); }
 
@@ -63,12 +66,14 @@ WorldContacts::WorldContacts(const SceneDef& scene, double substep) : surfaces_(
     first_point_.push_back(int(points_.size()));
     for (const ContactPoint& p : contact_points(def)) points_.push_back(p);
     materials_.push_back({def.friction, def.dynamic_friction, def.restitution});
+    extent_.push_back(mass_properties(body_shape_def(def)).extent);
   }
   first_point_.push_back(int(points_.size()));
   slots_.resize(points_.size() * std::size_t(surfaces_.count()));
   pairs_.resize(scene.rigid_bodies.size() * std::size_t(surfaces_.count()));
   v_before_.resize(scene.rigid_bodies.size());
   omega_before_.resize(scene.rigid_bodies.size());
+  near_.resize(std::size_t(surfaces_.count()));
 }
 
 void WorldContacts::begin_substep(const std::vector<RigidBody>& bodies) {
@@ -86,6 +91,14 @@ void WorldContacts::solve_positions(std::vector<RigidBody>& bodies) {
     // applied together; again until no point is deeper than kResolved (or kNormalPasses).
     for (int point = first_point_[k]; point < first_point_[k + 1]; ++point)
       for (int s = 0; s < surfaces; ++s) slot(point, s).touching = false;
+    // Only the surfaces the body's bounding ball reaches (grown by a margin for the passes' moves).
+    bool touches_any = false;
+    for (int s = 0; s < surfaces; ++s) {
+      SurfacePenetration pen;
+      near_[std::size_t(s)] = surfaces_.penetration(s, b.x, kNearMargin * extent_[k], pen);
+      touches_any = touches_any || near_[std::size_t(s)];
+    }
+    if (!touches_any) continue;
     for (int pass = 0; pass < kNormalPasses; ++pass) {
       const RigidBody before = b;
       double deepest = 0.0;
@@ -93,7 +106,8 @@ void WorldContacts::solve_positions(std::vector<RigidBody>& bodies) {
         const ContactPoint& c = points_[std::size_t(point)];
         for (int s = 0; s < surfaces; ++s) {
           SurfacePenetration pen;
-          if (!surfaces_.penetration(s, before.world_point(c.centre), c.radius, pen)) continue;
+          if (!near_[std::size_t(s)] || !surfaces_.penetration(s, before.world_point(c.centre), c.radius, pen))
+            continue;
           Slot& contact = slot(point, s);
           const Vec3d n = pen.normal;
           contact.normal = n;

@@ -4,7 +4,8 @@
 // Contact points, in the body frame, each the centre of a ball of radius rho: a box's 8
 // corners (rho = 0), a sphere's centre (rho = its radius), a capsule's two cap centres (rho = its
 // radius). Every iteration, body by body in scene order (serial: the same bits at any thread
-// count), with a point's centre c = x + R r_c against each surface:
+// count), with a point's centre c = x + R r_c against each surface its bounding ball (its
+// extent, grown by half) reaches:
 //   normals: depth d of the ball in the surface, outward normal n (a contact where d > 0); the
 //     body's contact point P = c - rho n, lever r = P - x, w = 1/m + (r x n)^T I^-1 (r x n);
 //     dlambda_n = d / w (zero compliance), the impulse dlambda_n n at r (body_correction.hpp).
@@ -111,6 +112,8 @@ class WorldContacts {
   std::vector<ContactPoint> points_;      // every body's, body after body
   std::vector<int> first_point_;          // per body, into points_; one more entry at the end
   std::vector<Material> materials_;       // per body
+  std::vector<double> extent_;            // per body: its farthest point from the centre (m)
+  std::vector<char> near_;                // per surface: the body now within reach of it
   std::vector<Vec3d> v_before_, omega_before_;  // per body, at the start of the substep
   std::vector<Slot> slots_;
   std::vector<Pair> pairs_;
