@@ -3,7 +3,9 @@
 // torque-free motion of an asymmetric box (precession, and the flip of a spin about the
 // intermediate axis) from the gyroscopic term; the bodies' file per frame. Joints: a physical
 // pendulum's period, a double pendulum's energy, a hinge's motor and limits; the shipped
-// pendulums at any thread count and across a checkpoint.
+// pendulums at any thread count and across a checkpoint. Contacts with the static world: the
+// friction ramp, a drop without jitter, the bounce height, a sliding ball that starts rolling,
+// every collider shape, threads and checkpoints.
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
@@ -343,30 +345,48 @@ TEST(Joints, PendulumsAreBitIdenticalOnOneTwoAndThreeThreads) {
   EXPECT_EQ(run(3), one);
 }
 
-// The bodies' state is the checkpoint's chunk "rigid.bodies": a resumed simulation continues bit
-// for bit (the text of bodies.%04d.jsonl carries every bit: shortest round-trip doubles).
-TEST(Joints, CheckpointContinuesBitForBitWithTheBodies) {
-  const SceneDef scene = pendulums_scene();
-  const fs::path dir = fs::temp_directory_path() / "seiche_rigid_checkpoint";
+namespace {
+
+// `scene` stepped `at` frames, checkpointed, and stepped `more`; a second simulation restored from
+// the checkpoint and stepped `more` too. The checkpoint as read back, and the bodies' file of the
+// restored simulation before its steps and of both at the end.
+struct Resumed {
+  Checkpoint checkpoint;
+  std::string restored, straight, resumed;
+};
+
+Resumed resume_from_checkpoint(const SceneDef& scene, const std::string& name, int at, int more) {
+  const fs::path dir = fs::temp_directory_path() / name;
   fs::remove_all(dir);
   fs::create_directories(dir);
   const fs::path file = dir / "checkpoint.bin";
   Simulation straight(scene);
-  for (int f = 0; f < 20; ++f) straight.step_frame();
-  write_file_atomically(file, encode_checkpoint(straight, 20));
-  for (int f = 0; f < 10; ++f) straight.step_frame();
+  for (int f = 0; f < at; ++f) straight.step_frame();
+  write_file_atomically(file, encode_checkpoint(straight, at));
+  for (int f = 0; f < more; ++f) straight.step_frame();
+  Resumed r{read_checkpoint(file), {}, {}, {}};
+  Simulation resumed(scene);
+  restore_checkpoint(resumed, r.checkpoint, at, file);
+  r.restored = encode_bodies_jsonl(scene, resumed.body_poses());
+  for (int f = 0; f < more; ++f) resumed.step_frame();
+  r.straight = encode_bodies_jsonl(scene, straight.body_poses());
+  r.resumed = encode_bodies_jsonl(scene, resumed.body_poses());
+  fs::remove_all(dir);
+  return r;
+}
 
-  const Checkpoint cp = read_checkpoint(file);
-  const CheckpointChunks::Chunk* bodies = cp.chunks.find("rigid.bodies");
+}  // namespace
+
+// The bodies' state is the checkpoint's chunk "rigid.bodies": a resumed simulation continues bit
+// for bit (the text of bodies.%04d.jsonl carries every bit: shortest round-trip doubles).
+TEST(Joints, CheckpointContinuesBitForBitWithTheBodies) {
+  const SceneDef scene = pendulums_scene();
+  const Resumed r = resume_from_checkpoint(scene, "seiche_rigid_checkpoint", 20, 10);
+  const CheckpointChunks::Chunk* bodies = r.checkpoint.chunks.find("rigid.bodies");
   ASSERT_NE(bodies, nullptr);
   EXPECT_EQ(bodies->bytes.size(), 6u * 13u * sizeof(double));
-  Simulation resumed(scene);
-  restore_checkpoint(resumed, cp, 20, file);
-  const std::string before = encode_bodies_jsonl(scene, Simulation(scene).body_poses());
-  EXPECT_NE(encode_bodies_jsonl(scene, resumed.body_poses()), before);
-  for (int f = 0; f < 10; ++f) resumed.step_frame();
-  EXPECT_EQ(encode_bodies_jsonl(scene, resumed.body_poses()), encode_bodies_jsonl(scene, straight.body_poses()));
-  fs::remove_all(dir);
+  EXPECT_NE(r.restored, encode_bodies_jsonl(scene, Simulation(scene).body_poses()));
+  EXPECT_EQ(r.resumed, r.straight);
 }
 
 // ---- Fixed, distance and slider joints ---------------------------------------------------------
@@ -676,17 +696,7 @@ TEST(Contacts, CheckpointContinuesBitForBitThroughContacts) {
        "restitution": 0.7}]
   })",
                                          "resume.json");
-  const fs::path dir = fs::temp_directory_path() / "seiche_contact_checkpoint";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  const fs::path file = dir / "checkpoint.bin";
-  Simulation straight(scene);
-  for (int f = 0; f < 20; ++f) straight.step_frame();
-  write_file_atomically(file, encode_checkpoint(straight, 20));
-  for (int f = 0; f < 20; ++f) straight.step_frame();
-  Simulation resumed(scene);
-  restore_checkpoint(resumed, read_checkpoint(file), 20, file);
-  for (int f = 0; f < 20; ++f) resumed.step_frame();
-  EXPECT_EQ(encode_bodies_jsonl(scene, resumed.body_poses()), encode_bodies_jsonl(scene, straight.body_poses()));
-  fs::remove_all(dir);
+  const Resumed r = resume_from_checkpoint(scene, "seiche_contact_checkpoint", 20, 20);
+  EXPECT_NE(r.restored, encode_bodies_jsonl(scene, Simulation(scene).body_poses()));
+  EXPECT_EQ(r.resumed, r.straight);
 }
