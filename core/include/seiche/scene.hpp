@@ -115,6 +115,11 @@ struct RigidBodyDef {
   /// Not a key: a mesh body's mesh as the loader read it (once), in the body frame with its mass
   /// properties. Null for the other shapes or a definition made in code (then read from the file).
   std::shared_ptr<const rigid::BodyMesh> loaded_mesh;
+  /// Contacts with the domain's walls and the colliders (families/rigid/world_contacts.hpp); each
+  /// coefficient mixed with the surface's `friction` as sqrt(mu_body mu_surface).
+  float friction = 0.5f;              ///< static (Coulomb) friction coefficient (>= 0)
+  float dynamic_friction = 0.4f;      ///< dynamic (sliding) friction coefficient (>= 0)
+  float restitution = 0.0f;           ///< the share of the normal speed a bounce keeps, in [0, 1]
 };
 
 /// One entry of "joints": a joint between two rigid bodies, or a body and the world (XPBD with

@@ -8,8 +8,6 @@
 
 namespace seiche {
 
-namespace {
-
 // Mesh colliders: the field's samples are a 64th of the mesh's largest side unless the scene
 // says otherwise, over the mesh's box grown by 4 samples.
 std::unique_ptr<MeshSdf> build_collider_sdf(const ColliderDef& c, std::size_t index) {
@@ -31,6 +29,8 @@ std::unique_ptr<MeshSdf> build_collider_sdf(const ColliderDef& c, std::size_t in
   build_mesh_sdf(mesh, voxel, 4.0f * voxel, c.mesh.file, path, *sdf);
   return sdf;
 }
+
+namespace {
 
 kernels::CollisionShape to_shape(const ColliderDef& c, const MeshSdf* sdf) {
   kernels::CollisionShape s;

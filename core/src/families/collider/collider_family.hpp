@@ -14,6 +14,11 @@
 
 namespace seiche {
 
+/// The signed distance field of mesh collider `c` (scene.colliders[index]): sampled at its
+/// `voxel_size`, or a 64th of the mesh's largest side, over the mesh's box grown by 4 samples. The
+/// particles' collisions and the rigid bodies' contacts (families/rigid/world_surfaces.hpp) use it.
+std::unique_ptr<MeshSdf> build_collider_sdf(const ColliderDef& c, std::size_t index);
+
 class ColliderFamily final : public Family {
  public:
   /// Every particle keeps its store radius (the radius column, written by its family) from

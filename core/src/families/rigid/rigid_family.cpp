@@ -120,6 +120,7 @@ RigidFamily::RigidFamily(const SceneDef& scene)
   std::vector<double> extent;
   bodies_ = make_bodies(scene, extent);
   joints_ = rigid::JointSolver(make_joints(scene, bodies_, extent));
+  contacts_ = rigid::WorldContacts(scene, h_);
   start_energy_ = energy();
 }
 
@@ -130,6 +131,10 @@ void RigidFamily::add_passes(std::vector<Pass>& passes) {
   passes.push_back({"body update", Stage::Update, pass_order::kBodyUpdate, true, [this](const StepContext&) {
                       update();
                     }});
+  passes.push_back({"body contacts", Stage::Iterate, pass_order::kBodyContacts, true,
+                    [this](const StepContext&) { contacts_.solve_positions(bodies_); }});
+  passes.push_back({"body contact velocities", Stage::Update, pass_order::kBodyContactVelocities, true,
+                    [this](const StepContext&) { contacts_.solve_velocities(bodies_); }});
   if (joints_.empty()) return;
   passes.push_back({"joints reset", Stage::BeginSubstep, pass_order::kJointReset, false,
                     [this](const StepContext&) { joints_.reset_multipliers(); }});
@@ -139,6 +144,7 @@ void RigidFamily::add_passes(std::vector<Pass>& passes) {
 
 void RigidFamily::predict() {
   joints_.begin_substep(bodies_);
+  contacts_.begin_substep(bodies_);
   for (RigidBody& b : bodies_) rigid::predict_body(b, gravity_, h_);
 }
 

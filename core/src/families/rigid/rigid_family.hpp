@@ -10,7 +10,11 @@
 //   joints   their connector points and axes in the bodies' frames (from the scene); their
 //            multipliers and motor start angles live within a substep, so are not state
 // Passes: "body predict" (Predict, kBodyPredict) and "body update" (Update, kBodyUpdate);
-// with joints, a reset (BeginSubstep, kJointReset) and "joints" every iteration (kJoints).
+// with joints, a reset (BeginSubstep, kJointReset) and "joints" every iteration (kJoints);
+// contacts with the static world (world_contacts.hpp): "body contacts" every iteration
+// (kBodyContacts, after the joints) and "body contact velocities" after the update
+// (kBodyContactVelocities: dynamic friction and restitution); their multipliers live within a
+// substep (reset in the predict pass), so are not state either.
 // Error rows: "joint_drift" (each joint's positional error, JointSolver::error, relative to its
 // length), "joint_angle_error" (radians; hinge, fixed and slider joints), "body_energy" (|E - E_0| / E_0, E the bodies' kinetic plus
 // gravitational energy, zero at the domain's lowest corner as for the particles).
@@ -21,6 +25,7 @@
 #include "joint.hpp"
 #include "loop/family.hpp"
 #include "rigid_body.hpp"
+#include "world_contacts.hpp"
 #include "seiche/frame_exporter.hpp"
 #include "seiche/scene.hpp"
 
@@ -48,6 +53,7 @@ class RigidFamily final : public Family {
 
   std::vector<rigid::RigidBody> bodies_;
   rigid::JointSolver joints_;
+  rigid::WorldContacts contacts_;  // with the domain's walls and the colliders
   rigid::Vec3d gravity_;
   rigid::Vec3d lowest_corner_;
   double h_;             // the substep (s), in double: frame_dt / substeps

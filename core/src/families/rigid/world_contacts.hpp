@@ -1,0 +1,126 @@
+// Contacts of rigid bodies with the static world (world_surfaces.hpp), with Coulomb friction and
+// restitution, after Müller et al. 2020, sections 3.5-3.6.
+//
+// Contact points, in the body frame, each the centre of a ball of radius rho: a box's 8
+// corners (rho = 0), a sphere's centre (rho = its radius), a capsule's two cap centres (rho = its
+// radius), a mesh body's vertices (rho = 0: a mesh touches at its vertices only, so a long edge
+// or a large face may sink into a sphere or a convex collider between them). Every iteration, body by body in scene order (serial: the same bits at any thread
+// count), with a point's centre c = x + R r_c against each surface its bounding ball (its
+// extent, grown by half) reaches:
+//   normals: depth d of the ball in the surface, outward normal n (a contact where d > 0); the
+//     body's contact point P = c - rho n, lever r = P - x, w = 1/m + (r x n)^T I^-1 (r x n);
+//     dlambda_n = d / w (zero compliance), the impulse dlambda_n n at r (body_correction.hpp).
+//     All of a body's points from the same pose, applied together (Jacobi), and again until no
+//     point is deeper than 1e-12 m (at most 32 passes). One point after the other (the paper's
+//     Gauss-Seidel) turns the body at each corner, which the next corner undoes: a resting box
+//     then slides on its corners' tangential motion, and its normal multipliers overshoot; a
+//     face's corners pushed together move it straight out.
+//   static friction, per surface, in the cone of the body and that surface together: with
+//     lambda_n the sum of its points' normal multipliers of the substep and lambda_t the vector
+//     sum of the friction impulses so far, a correction is applied only where
+//     |lambda_t + its impulse| < mu_s lambda_n. The slip of a body point since the substep began:
+//     dp = P - P_prev (P_prev = x_prev + R(q_prev) r_local; the world does not move),
+//     dp_t = dp - (dp.n) n, t = dp_t / |dp_t|.
+//     - A face (3 points or more on the surface) cannot tip: its normals hold it. One constraint
+//       at the points' centre (weighted by their lambda_n), which moves the body along the
+//       surface and turns it about n only: w_t = 1/m + ((r x t).n)^2 n^T I^-1 n, the impulse
+//       -|dp_t| / w_t t. Then its turn about n since the substep began, theta = n.log(q q_prev^-1),
+//       undone by the angular impulse -theta / (n^T I^-1 n) where its sum stays below
+//       mu_s lambda_n rho_patch (rho_patch: the points' weighted mean distance from the centre).
+//     - Else (a ball, an edge, a corner) each touching point's impulse -|dp_t| / w_t t (w_t as w,
+//       along t), all from the same pose, applied together.
+//   (lambda_n, lambda_t and the twist are reset when a substep begins.)
+// After the velocity update (v, omega from the positions), per surface the body touched in the
+// substep (lambda_n > 0), with v_c = v + omega x r at a point, v_n = v_c.n, v_t = v_c - v_n n:
+//   restitution, point by point: dv = n (-v_n + max(-e vbar_n, 0)), vbar_n = n.(vbar + omegabar x r)
+//     from the velocities before the substep; e = 0 where |vbar_n| <= 2 |g| h (a body at rest
+//     gains g h a substep: no bounce from that, no jitter); applied as the impulse p = dv / w
+//     (w along dv): v += p / m, omega += I^-1 (r x p).
+//   dynamic friction (the paper's eq. 30, as an impulse): the speed change along -v_t is
+//     min(mu_d lambda_n w_t / h, |v_t|): the impulse mu_d lambda_n / h (mu_d times the substep's
+//     normal impulse) at most. A face at its centre with its w_t (above), and its spin about n
+//     slowed by at most mu_d lambda_n rho_patch n^T I^-1 n / h; else point by point with its own
+//     lambda_n.
+// Materials: the body's static friction mu_s, dynamic mu_d and restitution e; a surface has one
+// Coulomb coefficient mu_c (the domain's or the collider's `friction`), mixed with the body's as
+// the geometric mean, mu = sqrt(mu_body mu_c): a frictionless side (0) gives no friction, equal
+// coefficients give that coefficient.
+#pragma once
+
+#include <utility>
+#include <vector>
+
+#include "rigid_body.hpp"
+#include "seiche/scene.hpp"
+#include "world_surfaces.hpp"
+
+namespace seiche::rigid {
+
+/// One contact point of a body: the centre of a ball in the body frame, and its radius.
+struct ContactPoint {
+  Vec3d centre;
+  double radius = 0.0;
+};
+
+/// The contact points of `def`'s shape (above).
+std::vector<ContactPoint> contact_points(const RigidBodyDef& def);
+
+class WorldContacts {
+ public:
+  WorldContacts() = default;
+  /// The scene's bodies (their points and materials, in scene order) against its static world.
+  WorldContacts(const SceneDef& scene, double substep);
+
+  /// Before the bodies' predict: their velocities before the substep (for restitution), and the
+  /// multipliers reset.
+  void begin_substep(const std::vector<RigidBody>& bodies);
+  /// One iteration of the positional pass (normal and static friction).
+  void solve_positions(std::vector<RigidBody>& bodies);
+  /// After the velocity update: dynamic friction and restitution.
+  void solve_velocities(std::vector<RigidBody>& bodies);
+
+ private:
+  struct Material {
+    double static_friction = 0.0, dynamic_friction = 0.0, restitution = 0.0;
+  };
+  struct Slot {  // one (body, point, surface) within a substep
+    double lambda_n = 0.0;
+    bool touching = false;  // in this iteration
+    Vec3d normal;
+    Vec3d local;  // the body's contact point P, body frame
+  };
+  struct Pair {  // one (body, surface) within a substep
+    double lambda_n = 0.0;  // the sum of its points' normal multipliers
+    Vec3d lambda_t;         // the sum of their static friction impulses (vector)
+    double twist = 0.0;     // a face's static friction about the normal (angular impulse)
+  };
+  struct Patch {  // a face of a body on a surface
+    Vec3d centre;  // its points' centre weighted by their normal multipliers, body frame
+    Vec3d normal;
+    double radius = 0.0;  // rho: its points' mean distance from the centre, weighted the same
+  };
+  /// A face: 3 points or more of `body` on `surface` (touching in this iteration, or in the
+  /// substep), and their centre.
+  bool face_patch(std::size_t body, int surface, bool this_iteration, Patch& out);
+  Slot& slot(int point, int surface) {
+    return slots_[std::size_t(point) * std::size_t(surfaces_.count()) + std::size_t(surface)];
+  }
+  Pair& body_surface(std::size_t body, int surface) {
+    return pairs_[body * std::size_t(surfaces_.count()) + std::size_t(surface)];
+  }
+
+  WorldSurfaces surfaces_;
+  std::vector<ContactPoint> points_;      // every body's, body after body
+  std::vector<int> first_point_;          // per body, into points_; one more entry at the end
+  std::vector<Material> materials_;       // per body
+  std::vector<double> extent_;            // per body: its farthest point from the centre (m)
+  std::vector<char> near_;                // per surface: the body now within reach of it
+  std::vector<Vec3d> v_before_, omega_before_;  // per body, at the start of the substep
+  std::vector<Slot> slots_;
+  std::vector<Pair> pairs_;
+  std::vector<std::pair<Vec3d, Vec3d>> friction_;  // scratch: (lever, impulse) of one surface's points
+  double h_ = 0.0;
+  double rest_speed_ = 0.0;  // 2 |g| h
+};
+
+}  // namespace seiche::rigid
