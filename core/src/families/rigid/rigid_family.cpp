@@ -117,7 +117,7 @@ RigidFamily::RigidFamily(const SceneDef& scene)
       h_(scene.solver.frame_dt / scene.solver.substeps) {
   std::vector<double> extent;
   bodies_ = make_bodies(scene, extent);
-  joints_ = rigid::JointSolver(make_joints(scene, bodies_, extent));
+  joints_ = rigid::JointSolver(make_joints(scene, bodies_, extent), bodies_, scene.solver.joint_trees);
   start_energy_ = energy();
 }
 
