@@ -72,6 +72,9 @@ class JointSolver {
   void begin_substep(std::span<const RigidBody> bodies);
   /// Before the first iteration: every multiplier to 0.
   void reset_multipliers();
+  /// The tree solve's multipliers, which carry across substeps (the checkpoint's state).
+  std::vector<Vec3d> tree_multipliers() const { return trees_.multipliers(); }
+  void restore_tree_multipliers(std::span<const Vec3d> lambdas) { trees_.restore_multipliers(lambdas); }
   /// How many joints the tree solve takes.
   std::size_t tree_joints() const;
   /// One iteration: the trees, then every other joint once, in order.

@@ -86,6 +86,18 @@ std::array<double, 36> generalized_mass(const RigidBody& b) {
 constexpr int kHalvings = 4;
 constexpr double kArmijo = 0.1;
 
+// The tension part of the geometric stiffness of a body pulled by the impulse f at its lever r
+// (joint_tree.hpp): k (I - r r^T / |r|^2) on the rotation block, k = max(f . r, 0).
+void add_geometric_stiffness(std::array<double, 36>& k, Vec3d r, Vec3d f) {
+  const double r2 = dot(r, r);
+  const double stiffness = dot(f, r);
+  if (!(r2 > 0.0) || !(stiffness > 0.0)) return;
+  const double v[3] = {r.x, r.y, r.z};
+  for (int row = 0; row < 3; ++row)
+    for (int c = 0; c < 3; ++c)
+      k[std::size_t((3 + row) * 6 + 3 + c)] += stiffness * ((row == c ? 1.0 : 0.0) - v[row] * v[c] / r2);
+}
+
 int find_root(std::vector<int>& root, int v) {
   while (root[std::size_t(v)] != v) v = root[std::size_t(v)] = root[std::size_t(root[std::size_t(v)])];
   return v;
@@ -116,7 +128,7 @@ JointTreeSolver::JointTreeSolver(std::span<const BallLink> links, std::span<cons
       for (const auto& [other, e] : adjacent[std::size_t(nodes_[p].body)])
         if (!seen[std::size_t(other)]) {
           seen[std::size_t(other)] = 1;
-          nodes_.push_back({other, int(p), e, links_[std::size_t(e)].body_b == other, {}});
+          nodes_.push_back({other, int(p), e, links_[std::size_t(e)].body_b == other, {}, {}});
         }
   };
   // One tree per joint to the ground (the ground is fixed, so they are independent), then one
@@ -126,14 +138,14 @@ JointTreeSolver::JointTreeSolver(std::span<const BallLink> links, std::span<cons
   for (const auto& [other, e] : adjacent[std::size_t(ground)]) {
     if (seen[std::size_t(other)]) continue;
     seen[std::size_t(other)] = 1;
-    nodes_.push_back({other, -1, e, links_[std::size_t(e)].body_b == other, {}});
+    nodes_.push_back({other, -1, e, links_[std::size_t(e)].body_b == other, {}, {}});
     grow(tree_start_.back());
     tree_start_.push_back(nodes_.size());
   }
   for (int v = 0; v < ground; ++v) {
     if (seen[std::size_t(v)] || adjacent[std::size_t(v)].empty()) continue;
     seen[std::size_t(v)] = 1;
-    nodes_.push_back({v, -1, -1, true, {}});
+    nodes_.push_back({v, -1, -1, true, {}, {}});
     grow(tree_start_.back());
     tree_start_.push_back(nodes_.size());
   }
@@ -141,7 +153,17 @@ JointTreeSolver::JointTreeSolver(std::span<const BallLink> links, std::span<cons
 }
 
 void JointTreeSolver::reset_multipliers() {
-  for (Node& n : nodes_) n.lambda = {};
+  for (Node& n : nodes_) n.previous_lambda = n.lambda, n.lambda = {};
+}
+
+std::vector<Vec3d> JointTreeSolver::multipliers() const {
+  std::vector<Vec3d> lambdas;
+  for (const Node& n : nodes_) lambdas.push_back(n.lambda);
+  return lambdas;
+}
+
+void JointTreeSolver::restore_multipliers(std::span<const Vec3d> lambdas) {
+  for (std::size_t i = 0; i < nodes_.size() && i < lambdas.size(); ++i) nodes_[i].lambda = lambdas[i];
 }
 
 void JointTreeSolver::solve(std::span<RigidBody> bodies, double h) {
@@ -152,6 +174,19 @@ void JointTreeSolver::solve(std::span<RigidBody> bodies, double h) {
   for (std::size_t i = 0; i < nodes_.size(); ++i) {
     work_[i].k = generalized_mass(bodies[std::size_t(nodes_[i].body)]);
     work_[i].r = {};
+  }
+  // Geometric stiffness: each body pulled at its connector by the previous substep's impulse.
+  for (std::size_t i = 0; i < nodes_.size(); ++i) {
+    const Node& n = nodes_[i];
+    if (n.link < 0) continue;
+    const BallLink& j = links_[std::size_t(n.link)];
+    const RigidBody &a = body(j.body_a), &b = body(j.body_b);
+    const Vec3d r_a = rotate(a.q, j.anchor_a), r_b = rotate(b.q, j.anchor_b);
+    // The impulse on b is +lambda, on a -lambda.
+    add_geometric_stiffness(work_[i].k, n.body_is_b ? r_b : r_a, n.body_is_b ? n.previous_lambda : -n.previous_lambda);
+    if (n.parent >= 0)
+      add_geometric_stiffness(work_[std::size_t(n.parent)].k, n.body_is_b ? r_a : r_b,
+                              n.body_is_b ? -n.previous_lambda : n.previous_lambda);
   }
   // Leaves to roots. Nothing moves before every factor exists, so a failed one (a body gone
   // non-finite) leaves the bodies as they are.
