@@ -52,6 +52,9 @@ struct SolverDef {
   /// (core/src/families/distance/distance_solver.hpp). Absent: one over the connected pieces
   /// without loops, none over those with loops.
   std::optional<int> distance_forests;
+  /// The exact solve of the ball joints along spanning trees of the rigid bodies, every
+  /// iteration (core/src/families/rigid/joint_tree.hpp); false: every joint iterative.
+  bool joint_trees = true;
 };
 
 /// "domain": the box that holds every particle. Particles are projected back inside it.

@@ -60,6 +60,23 @@ double JointSolver::hinge_angle(const Joint& j, std::span<const RigidBody> bodie
   return hinge_angle_of(j, a, b);
 }
 
+JointSolver::JointSolver(std::vector<Joint> joints, std::span<const RigidBody> bodies, bool trees)
+    : joints_(std::move(joints)), in_tree_(joints_.size(), 0) {
+  if (!trees) return;
+  std::vector<BallLink> links;
+  std::vector<std::size_t> joint_of;
+  for (std::size_t k = 0; k < joints_.size(); ++k) {
+    const Joint& j = joints_[k];
+    if (j.type != JointType::Ball) continue;
+    links.push_back({j.body_a, j.body_b, j.anchor_a, j.anchor_b, j.compliance});
+    joint_of.push_back(k);
+  }
+  trees_ = JointTreeSolver(links, bodies);
+  for (std::size_t l = 0; l < links.size(); ++l) in_tree_[joint_of[l]] = trees_.in_forest(l) ? 1 : 0;
+}
+
+std::size_t JointSolver::tree_joints() const { return std::size_t(std::count(in_tree_.begin(), in_tree_.end(), 1)); }
+
 void JointSolver::begin_substep(std::span<const RigidBody> bodies) {
   for (Joint& j : joints_)
     if (j.motor == MotorMode::Velocity) j.motor_start_angle = hinge_angle(j, bodies);
@@ -67,11 +84,15 @@ void JointSolver::begin_substep(std::span<const RigidBody> bodies) {
 
 void JointSolver::reset_multipliers() {
   for (Joint& j : joints_) j.lambda_position = j.lambda_align = j.lambda_limit = j.lambda_motor = 0.0;
+  trees_.reset_multipliers();
 }
 
 void JointSolver::solve(std::span<RigidBody> bodies, double h) {
+  trees_.solve(bodies, h);
   const double inverse_h2 = 1.0 / (h * h);
-  for (Joint& j : joints_) {
+  for (std::size_t k = 0; k < joints_.size(); ++k) {
+    if (in_tree_[k]) continue;
+    Joint& j = joints_[k];
     RigidBody& a = j.body_a < 0 ? world_ : bodies[std::size_t(j.body_a)];
     RigidBody& b = j.body_b < 0 ? world_ : bodies[std::size_t(j.body_b)];
     const double alpha = j.compliance * inverse_h2;

@@ -18,8 +18,10 @@
 //           any s without limits): the positional error d - clamp(d . a_a, lower, upper) a_a.
 // A body index of -1 is the world (a fixed body at the origin, unrotated), whose "body frame" is
 // the world frame.
-// The joints are solved serially in scene order (Gauss-Seidel), each correction seeing the
-// last: deterministic at any thread count. A joint's parts: its angular constraints first (the
+// With the tree solve on (solver.joint_trees), the ball joints that form a forest are solved
+// first, exactly along their trees (joint_tree.hpp); the rest (the other types, and the ball
+// joints that close loops) are then solved serially in scene order (Gauss-Seidel), each
+// correction seeing the last: deterministic at any thread count. A joint's parts: its angular constraints first (the
 // paper's order: alignment, limits), then the anchor, then a motor's drive, which is what each
 // iteration ends on, so that the joint turns at the motor's rate while the anchor converges.
 #pragma once
@@ -27,6 +29,7 @@
 #include <span>
 #include <vector>
 
+#include "joint_tree.hpp"
 #include "rigid_body.hpp"
 
 namespace seiche::rigid {
@@ -59,7 +62,8 @@ struct Joint {
 class JointSolver {
  public:
   JointSolver() = default;
-  explicit JointSolver(std::vector<Joint> joints) : joints_(std::move(joints)) {}
+  /// With `trees`, the ball joints that form a forest over `bodies` take the tree solve.
+  JointSolver(std::vector<Joint> joints, std::span<const RigidBody> bodies, bool trees);
 
   const std::vector<Joint>& joints() const { return joints_; }
   bool empty() const { return joints_.empty(); }
@@ -68,7 +72,12 @@ class JointSolver {
   void begin_substep(std::span<const RigidBody> bodies);
   /// Before the first iteration: every multiplier to 0.
   void reset_multipliers();
-  /// One iteration: every joint once, in order.
+  /// The tree solve's multipliers, which carry across substeps (the checkpoint's state).
+  std::vector<Vec3d> tree_multipliers() const { return trees_.multipliers(); }
+  void restore_tree_multipliers(std::span<const Vec3d> lambdas) { trees_.restore_multipliers(lambdas); }
+  /// How many joints the tree solve takes.
+  std::size_t tree_joints() const;
+  /// One iteration: the trees, then every other joint once, in order.
   void solve(std::span<RigidBody> bodies, double h);
 
   /// A joint's errors on the bodies as they are: the length of its positional error (m: |P_b -
@@ -86,6 +95,8 @@ class JointSolver {
 
  private:
   std::vector<Joint> joints_;
+  JointTreeSolver trees_;
+  std::vector<char> in_tree_;  // per joint: the tree solve takes it
   RigidBody world_;  // fixed, at the origin, unrotated
 };
 

@@ -19,6 +19,7 @@ using rigid::Vec3d;
 namespace {
 
 constexpr const char* kBodiesChunk = "rigid.bodies";  // the checkpoint chunk of the bodies' state
+constexpr const char* kTreesChunk = "rigid.joint_trees";  // the tree solve's multipliers
 
 // One body's state as it goes into the checkpoint.
 struct SavedBody {
@@ -119,7 +120,7 @@ RigidFamily::RigidFamily(const SceneDef& scene)
       h_(scene.solver.frame_dt / scene.solver.substeps) {
   std::vector<double> extent;
   bodies_ = make_bodies(scene, extent);
-  joints_ = rigid::JointSolver(make_joints(scene, bodies_, extent));
+  joints_ = rigid::JointSolver(make_joints(scene, bodies_, extent), bodies_, scene.solver.joint_trees);
   contacts_ = rigid::WorldContacts(scene, h_);
   start_energy_ = energy();
 }
@@ -199,6 +200,8 @@ void RigidFamily::save_state(CheckpointChunks& chunks) const {
   std::vector<SavedBody> saved;
   for (const RigidBody& b : bodies_) saved.push_back({b.x, b.q, b.v, b.omega});
   chunks.put_values(kBodiesChunk, std::span<const SavedBody>(saved));
+  const std::vector<Vec3d> lambdas = joints_.tree_multipliers();
+  if (!lambdas.empty()) chunks.put_values(kTreesChunk, std::span<const Vec3d>(lambdas));
 }
 
 void RigidFamily::restore_state(const CheckpointChunks& chunks) {
@@ -211,6 +214,10 @@ void RigidFamily::restore_state(const CheckpointChunks& chunks) {
     b.v = saved[k].v;
     b.omega = saved[k].omega;
   }
+  std::vector<Vec3d> lambdas = joints_.tree_multipliers();
+  if (lambdas.empty()) return;
+  chunks.get_values(kTreesChunk, std::span<Vec3d>(lambdas));
+  joints_.restore_tree_multipliers(lambdas);
 }
 
 }  // namespace seiche

@@ -8,7 +8,9 @@
 //   bodies   position, orientation, velocity, angular velocity (state: checkpoint chunk
 //            "rigid.bodies"); mass and inertia (rebuilt from the scene on a resume)
 //   joints   their connector points and axes in the bodies' frames (from the scene); their
-//            multipliers and motor start angles live within a substep, so are not state
+//            multipliers and motor start angles live within a substep, so are not state, but
+//            for the tree solve's (joint_tree.hpp: its geometric stiffness reads the previous
+//            substep's; checkpoint chunk "rigid.joint_trees", present with a tree)
 // Passes: "body predict" (Predict, kBodyPredict) and "body update" (Update, kBodyUpdate);
 // with joints, a reset (BeginSubstep, kJointReset) and "joints" every iteration (kJoints);
 // contacts with the static world (world_contacts.hpp): "body contacts" every iteration
