@@ -205,8 +205,8 @@ TEST(Golden, FlagAfter120Frames) {
 }
 
 // Shape matching (rigid, soft, linear, plastic and region clusters: scenes/shapes.json and
-// soft_bunny.json) and rigid bodies on joints (scenes/pendulums.json, their own state hashed by
-// body_state_hash), added in issue 17: fused by the native AVX-512 build, unfused by the x86-64
+// soft_bunny.json) and rigid bodies on joints (scenes/pendulums.json and rigid_chain.json, their
+// own state hashed by body_state_hash), added in issue 17: fused by the native AVX-512 build, unfused by the x86-64
 // build, which give the same bits here (measured). The bodies' state is double precision with machine-independent sin, cos and atan2
 // (core/src/families/rigid/portable_trig.hpp).
 TEST(Golden, ShapesAfter60Frames) {
@@ -216,7 +216,10 @@ TEST(Golden, SoftBunnyAfter60Frames) {
   expect_golden({"soft_bunny.json", 60, 0x2278011bca836341ull, 0x2278011bca836341ull});
 }
 TEST(Golden, PendulumsAfter120Frames) {
-  expect_golden({"pendulums.json", 120, 0xe257b72015698419ull, 0xe257b72015698419ull, HashedState::Bodies});
+  expect_golden({"pendulums.json", 120, 0x85431c22f8805df3ull, 0x85431c22f8805df3ull, HashedState::Bodies});
+}
+TEST(Golden, RigidChainAfter120Frames) {
+  expect_golden({"rigid_chain.json", 120, 0x8c183c0a86fa60bcull, 0x8c183c0a86fa60bcull, HashedState::Bodies});
 }
 
 // The golden values' premise: a build whose instruction set has FMA fuses its multiply-adds (else

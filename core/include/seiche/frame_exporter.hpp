@@ -43,8 +43,9 @@ class FrameExporter {
   /// The files write_frame() writes for `frame`, relative to the output folder.
   virtual std::vector<std::filesystem::path> files(int frame) const = 0;
   /// Writes this frame's files into `dir`, each atomically (write_file_atomically). Returns the
-  /// bytes written. Throws IoError when a file cannot be written.
-  virtual std::uint64_t write_frame(const FrameView& frame, const std::filesystem::path& dir) = 0;
+  /// bytes written. Throws IoError when a file cannot be written. By default, the files of
+  /// encode_frame(); an exporter whose library writes its own files overrides it.
+  virtual std::uint64_t write_frame(const FrameView& frame, const std::filesystem::path& dir);
 
   /// One file of a frame as bytes: its name relative to the output folder and its contents.
   struct EncodedFile {

@@ -27,15 +27,6 @@ class ClothObjExporter final : public FrameExporter {
     return f;
   }
 
-  std::uint64_t write_frame(const FrameView& frame, const std::filesystem::path& dir) override {
-    std::uint64_t bytes = 0;
-    for (const EncodedFile& f : encode_frame(frame)) {
-      write_file_atomically(dir / f.name, f.bytes);
-      bytes += f.bytes.size();
-    }
-    return bytes;
-  }
-
   std::vector<EncodedFile> encode_frame(const FrameView& frame) const override {
     const ParticleStore& s = frame.particles;
     const std::vector<std::uint32_t> index_of_id = s.index_of_id();

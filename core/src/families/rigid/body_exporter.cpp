@@ -43,15 +43,6 @@ class BodyExporter final : public FrameExporter {
     return names;
   }
 
-  std::uint64_t write_frame(const FrameView& frame, const std::filesystem::path& dir) override {
-    std::uint64_t bytes = 0;
-    for (const EncodedFile& f : encode_frame(frame)) {
-      write_file_atomically(dir / f.name, f.bytes);
-      bytes += f.bytes.size();
-    }
-    return bytes;
-  }
-
   std::vector<EncodedFile> encode_frame(const FrameView& frame) const override {
     std::vector<EncodedFile> files{
         {frame_file_name(kStem, frame.frame, "jsonl"), encode_bodies_jsonl(scene_, frame.bodies)}};
