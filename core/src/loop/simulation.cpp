@@ -194,7 +194,8 @@ void Simulation::restore_state(const ParticleStore& saved, int frames_done) {
     const StoreColumn* from = saved.find(to.name);
     if (from == nullptr || from->type() != to.type())
       throw std::invalid_argument("Simulation::restore_state: the saved state has no column " + to.name);
-    std::memcpy(store_.find(to.name)->raw(), from->raw(), n * StoreColumn::kElementBytes);
+    if (n > 0)  // a scene of rigid bodies only has no particles, and its columns no buffers
+      std::memcpy(store_.find(to.name)->raw(), from->raw(), n * StoreColumn::kElementBytes);
   }
   frame_ = frames_done;
   time_ = frame_ * scene_.solver.frame_dt;
