@@ -23,8 +23,12 @@ namespace {
 // One particle per body is the least; past a million the body's clusters make every iteration
 // slow (and one cluster is matched by one thread).
 constexpr std::size_t kMaxParticlesPerShape = 1'000'000;
-// The lattice a sphere or a mesh is sampled on before its inside is kept: the mesh field's bound.
-constexpr double kMaxLatticeSamples = double(1u << 26);
+// The lattice a sphere or a mesh is sampled on before its inside is kept (its bounding box at
+// the spacing): 4 times the particle bound, so a body that fills a quarter of its box or more can
+// have the most particles. Building that field takes the loader about a second; the mesh
+// colliders' bound (2^26) let a scaled-up mesh shape keep the loader busy for minutes (found by
+// the scene fuzzer).
+constexpr double kMaxLatticeSamples = 4.0 * double(kMaxParticlesPerShape);
 // The lightest particle a shape may have: the raw particles' bound ("particles[k].mass"), so
 // that the inverse mass stays a normal float.
 constexpr double kMinParticleMass = 1e-12;
