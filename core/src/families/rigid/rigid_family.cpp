@@ -122,6 +122,9 @@ RigidFamily::RigidFamily(const SceneDef& scene)
   bodies_ = make_bodies(scene, extent);
   joints_ = rigid::JointSolver(make_joints(scene, bodies_, extent), bodies_, scene.solver.joint_trees);
   contacts_ = rigid::WorldContacts(scene, h_);
+  std::vector<std::pair<int, int>> jointed;
+  for (const Joint& j : joints_.joints()) jointed.push_back({j.body_a, j.body_b});
+  body_contacts_ = rigid::BodyContacts(scene, jointed, h_);
   start_energy_ = energy();
 }
 
@@ -136,6 +139,15 @@ void RigidFamily::add_passes(std::vector<Pass>& passes) {
                     [this](const StepContext&) { contacts_.solve_positions(bodies_); }});
   passes.push_back({"body contact velocities", Stage::Update, pass_order::kBodyContactVelocities, true,
                     [this](const StepContext&) { contacts_.solve_velocities(bodies_); }});
+  if (!body_contacts_.empty()) {
+    passes.push_back({"body pair contacts", Stage::Iterate, pass_order::kBodyPairContacts, true,
+                      [this](const StepContext&) {
+                        contacts_.touched(on_world_);
+                        body_contacts_.solve_positions(bodies_, on_world_);
+                      }});
+    passes.push_back({"body pair contact velocities", Stage::Update, pass_order::kBodyPairContactVelocities, true,
+                      [this](const StepContext&) { body_contacts_.solve_velocities(bodies_); }});
+  }
   if (joints_.empty()) return;
   passes.push_back({"joints reset", Stage::BeginSubstep, pass_order::kJointReset, false,
                     [this](const StepContext&) { joints_.reset_multipliers(); }});
@@ -146,6 +158,7 @@ void RigidFamily::add_passes(std::vector<Pass>& passes) {
 void RigidFamily::predict() {
   joints_.begin_substep(bodies_);
   contacts_.begin_substep(bodies_);
+  if (!body_contacts_.empty()) body_contacts_.begin_substep(bodies_);
   for (RigidBody& b : bodies_) rigid::predict_body(b, gravity_, h_);
 }
 
