@@ -135,19 +135,18 @@ void RigidFamily::add_passes(std::vector<Pass>& passes) {
   passes.push_back({"body update", Stage::Update, pass_order::kBodyUpdate, true, [this](const StepContext&) {
                       update();
                     }});
-  passes.push_back({"body contacts", Stage::Iterate, pass_order::kBodyContacts, true,
-                    [this](const StepContext&) { contacts_.solve_positions(bodies_); }});
+  // With the world, then between bodies (which reads which bodies the world holds).
+  passes.push_back({"body contacts", Stage::Iterate, pass_order::kBodyContacts, true, [this](const StepContext&) {
+                      contacts_.solve_positions(bodies_);
+                      if (body_contacts_.empty()) return;
+                      contacts_.touched(on_world_);
+                      body_contacts_.solve_positions(bodies_, on_world_);
+                    }});
   passes.push_back({"body contact velocities", Stage::Update, pass_order::kBodyContactVelocities, true,
-                    [this](const StepContext&) { contacts_.solve_velocities(bodies_); }});
-  if (!body_contacts_.empty()) {
-    passes.push_back({"body pair contacts", Stage::Iterate, pass_order::kBodyPairContacts, true,
-                      [this](const StepContext&) {
-                        contacts_.touched(on_world_);
-                        body_contacts_.solve_positions(bodies_, on_world_);
-                      }});
-    passes.push_back({"body pair contact velocities", Stage::Update, pass_order::kBodyPairContactVelocities, true,
-                      [this](const StepContext&) { body_contacts_.solve_velocities(bodies_); }});
-  }
+                    [this](const StepContext&) {
+                      contacts_.solve_velocities(bodies_);
+                      if (!body_contacts_.empty()) body_contacts_.solve_velocities(bodies_);
+                    }});
   if (joints_.empty()) return;
   passes.push_back({"joints reset", Stage::BeginSubstep, pass_order::kJointReset, false,
                     [this](const StepContext&) { joints_.reset_multipliers(); }});

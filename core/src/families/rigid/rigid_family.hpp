@@ -17,10 +17,8 @@
 // (kBodyContacts, after the joints) and "body contact velocities" after the update
 // (kBodyContactVelocities: dynamic friction and restitution); their multipliers live within a
 // substep (reset in the predict pass), so are not state either. Contacts between bodies
-// (body_contacts.hpp), where two bodies not on one joint can touch: "body pair contacts" every
-// iteration (kBodyPairContacts, after those with the world, whose touches tell which bodies rest
-// on it) and "body pair contact velocities" after the world's (kBodyPairContactVelocities); no
-// state either.
+// (body_contacts.hpp, where two bodies not on one joint can touch) run in the same two passes,
+// after those with the world (whose touches tell which bodies rest on it); no state either.
 // Error rows: "joint_drift" (each joint's positional error, JointSolver::error, relative to its
 // length), "joint_angle_error" (radians; hinge, fixed and slider joints), "body_energy" (|E - E_0| / E_0, E the bodies' kinetic plus
 // gravitational energy, zero at the domain's lowest corner as for the particles).
