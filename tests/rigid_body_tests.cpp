@@ -1332,20 +1332,32 @@ TEST(BodyContacts, CheckpointContinuesBitForBitThroughBodyContacts) {
   EXPECT_EQ(r.resumed, r.straight);
 }
 
-// Bodies joined by a joint do not touch each other (the pendulums' links meet at their joints).
-// Two boxes overlapping by 5 cm: pushed apart when free, left overlapping on a ball joint.
-TEST(BodyContacts, JointedBodiesDoNotCollide) {
-  const std::string bodies = R"("solver": {"gravity": [0, 0, 0]},
-    "domain": {"min": [-2, -1, -1], "max": [2, 1, 1]},
-    "rigid_bodies": [{"name": "a", "size": [0.2, 0.2, 0.2], "position": [0, 0, 0]},
-                     {"name": "b", "size": [0.2, 0.2, 0.2], "position": [0.15, 0, 0]}])";
-  Simulation free(load_scene_text("{" + bodies + "}", "free.json"));
-  Simulation joined(load_scene_text("{" + bodies + R"(, "joints": [{"body_a": "a", "body_b": "b", "anchor": [0.1, 0, 0]}]})",
-                                    "joined.json"));
-  free.step_frame(FrameMeasure::Skip);
-  joined.step_frame(FrameMeasure::Skip);
-  EXPECT_GE(free.body_poses()[1].position[0] - free.body_poses()[0].position[0], 0.2 - 1e-9);
-  EXPECT_NEAR(joined.body_poses()[1].position[0] - joined.body_poses()[0].position[0], 0.15, 1e-7);
+// Bodies joined by a joint do not touch each other (the pendulums' links meet at their joints),
+// nor do two of one articulation (a ragdoll's arms meet at the shoulder); a fixed body links
+// nothing. Two boxes overlapping by 5 cm, without gravity, after a frame: pushed apart when free;
+// left overlapping on a ball joint, and as the two ends of a chain of three; pushed apart when
+// each hangs on its own joint from a fixed bar.
+TEST(BodyContacts, JointedBodiesAndArticulationsDoNotCollide) {
+  // a and b overlap; c, 0.5 m above, is fixed or not.
+  const auto gap = [](bool c_fixed, const std::string& joints) {
+    Simulation sim(load_scene_text(fmt::format(R"({{"solver": {{"gravity": [0, 0, 0]}},
+      "domain": {{"min": [-2, -1, -1], "max": [2, 1, 1]}},
+      "rigid_bodies": [{{"name": "a", "size": [0.2, 0.2, 0.2], "position": [0, 0, 0]}},
+                       {{"name": "b", "size": [0.2, 0.2, 0.2], "position": [0.15, 0, 0]}},
+                       {{"name": "c", "size": [0.2, 0.2, 0.2], "position": [0, 0.5, 0], "fixed": {}}}]
+      {}}})",
+                                               c_fixed, joints),
+                                   "joined.json"));
+    sim.step_frame(FrameMeasure::Skip);
+    return sim.body_poses()[1].position[0] - sim.body_poses()[0].position[0];
+  };
+  const std::string hung_from_c = R"(, "joints": [{"body_a": "c", "body_b": "a", "anchor": [0, 0.3, 0]},
+                                                 {"body_a": "c", "body_b": "b", "anchor": [0.15, 0.3, 0]}])";
+  EXPECT_GE(gap(false, ""), 0.2 - 1e-9) << "free";
+  EXPECT_NEAR(gap(false, R"(, "joints": [{"body_a": "a", "body_b": "b", "anchor": [0.1, 0, 0]}])"), 0.15, 1e-7)
+      << "on a joint";
+  EXPECT_NEAR(gap(false, hung_from_c), 0.15, 1e-7) << "a chain a-c-b";
+  EXPECT_GE(gap(true, hung_from_c), 0.2 - 1e-9) << "each on its own joint from the fixed c";
 }
 
 // ---- The tree solve of ball joints (joint_tree.hpp) -------------------------------------------

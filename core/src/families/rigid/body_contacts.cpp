@@ -47,13 +47,13 @@ BodyContacts::BodyContacts(const SceneDef& scene, const std::vector<std::pair<in
   up_ = -normalized_or_zero(gravity);
   rest_speed_ = 2.0 * length(gravity) * h_;
   const std::size_t count = scene.rigid_bodies.size();
+  std::vector<std::pair<int, int>> apart;  // the pairs without contact, (lower, higher), sorted
+  for (const auto& [a, b] : jointed) apart.push_back({std::min(a, b), std::max(a, b)});
+  std::sort(apart.begin(), apart.end());
   for (std::size_t i = 0; i < count; ++i)
     for (std::size_t j = i + 1; j < count; ++j) {
       if (scene.rigid_bodies[i].fixed && scene.rigid_bodies[j].fixed) continue;
-      const bool joined = std::any_of(jointed.begin(), jointed.end(), [&](const std::pair<int, int>& p) {
-        return (p.first == int(i) && p.second == int(j)) || (p.first == int(j) && p.second == int(i));
-      });
-      if (!joined) candidates_.push_back({int(i), int(j)});
+      if (!std::binary_search(apart.begin(), apart.end(), std::pair{int(i), int(j)})) candidates_.push_back({int(i), int(j)});
     }
   if (candidates_.empty()) return;
   for (std::size_t k = 0; k < count; ++k) {

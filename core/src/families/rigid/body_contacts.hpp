@@ -1,54 +1,58 @@
 // Contacts between rigid bodies, with Coulomb friction and restitution, after Müller et al.
 // 2020, sections 3.5-3.6, as the contacts with the static world (world_contacts.hpp) do them, but
 // with two bodies moving: every correction is an impulse p on body a at lever r_a and -p on body b
-// at r_b (body_correction.hpp), and every inverse mass the sum w = w_a + w_b.
+// at r_b, and every inverse mass the sum w = w_a + w_b (body_correction.hpp).
 //
-// Narrow phase: each body's contact points (world_contacts.hpp: box corners, a sphere's centre
-// with its radius, a capsule's cap centres with its radius, a mesh's vertices) against the other
+// Narrow phase: two boxes face against face by separating axes and clipping (box_box.hpp). Any
+// other pair: each body's contact points (world_contacts.hpp: a sphere's centre with its radius,
+// a capsule's cap centres with its radius, box corners, a mesh's vertices) against the other
 // body's solid (world_surfaces.hpp's queries on body_solid: box, sphere, capsule, or the closed
 // mesh's signed distance field in its body frame), the point moved into that body's frame, both
-// ways per pair. A ball against a solid is exact, so sphere-sphere, sphere-capsule and
-// capsule-capsule end to end are exact; a capsule's side touches only through the other body's
-// points (two capsules crossed side on side pass through each other), and box-box with corners
-// only misses edge-edge contacts (two boxes crossed edge on edge sink into each other until a
-// corner touches): known limits.
+// ways per pair. A ball against a solid is exact: sphere-sphere, sphere-capsule, and
+// capsule-capsule end on or side by side. Known limits: two capsules crossed side on side (no cap
+// centre in the other) pass through each other; two boxes crossed edge on edge (box_box.hpp);
+// a mesh touches at its vertices, the normal from the other body's nearest face point by point.
 // For a's ball (centre c, radius rho) reaching depth d into b along b's outward normal m: the
 // normal n = m (the way a is pushed), a's point P_a = c - rho m, b's point P_b = P_a + d m; b's
 // ball into a: n = -m, P_b = c - rho m, P_a = P_b + d m.
 //
 // Broad phase, once a substep on the predicted poses: every pair of bodies not joined by a joint
-// and not both fixed whose centres are closer than 1.5 times the sum of their extents, visited in
-// a fixed order: from the lowest (along -gravity, the lower of the pair's two centres) up, ties
-// by the pair's index. Serial: the same bits on any thread count. A scene with no such pair
-// (one body, or bodies on joints only) adds no pass.
+// nor in one articulation (rigid_family.cpp) and not both fixed whose centres are closer than 1.5
+// times the sum of their extents, visited in a fixed order: from the lowest (along -gravity, the
+// lower of the pair's two centres) up, ties in the pairs' order. Serial: the same bits on any
+// thread count. A scene with no such pair does nothing more.
 //
-// Per iteration, pair by pair in that order (Gauss-Seidel across pairs, Jacobi within a pair):
-//   normals: all of the pair's points from the same poses, dlambda_i = d_i / (w_a + w_b), the
-//     impulses applied together, scaled by the step s that fits the depths best: with dd_j the
-//     change of point j's depth under all the impulses together (the bodies' linear response),
-//     s = sum d_j dd_j / sum dd_j^2, at most 1. A face seen from both sides (a box's 4 corners in
-//     the box below and that box's 4 corners in it) would otherwise be pushed twice as far, and
-//     the passes would swing; a single point keeps s = 1. Again until no point is deeper than
-//     1e-12 m (at most 32 passes).
-//   static friction: the relative slip of the two contact points since the substep began,
-//     dp = (P_a - P_a,prev) - (P_b - P_b,prev) (each from its body-frame point and its body's pose
-//     at the start), dp_t its part along the surface, t = dp_t / |dp_t|; each touching point's
-//     impulse -|dp_t| / (w_a,t + w_b,t) t from the same poses, applied together where the sum of
-//     the pair's friction impulses stays in the cone |lambda_t| < mu_s lambda_n.
-//   Stacks (shock propagation, Guendelman et al. 2003): a pair whose normal is within 45 degrees
-//     of the vertical, with its lower body resting (it touched the world in this substep, or a
-//     resting body below it, found in this same bottom-up order) treats that lower body as
-//     fixed (w = 0, not moved): the ground carries what lands on it. Without it, a 10-box stack
-//     at the default 8 substeps x 2 iterations splits each correction between two equal boxes,
-//     so the weight of the boxes above reaches the floor only over many iterations; the stack
-//     sinks into itself and tips (measured: see tests/rigid_body_tests.cpp, Contacts.StackOf...).
-//     A pair in the air, or side by side, keeps both masses: its momentum is conserved.
-// After the velocity update, per touching pair, point by point, with v_rel = (v_a + omega_a x r_a)
-// - (v_b + omega_b x r_b), v_n = v_rel.n, v_t = v_rel - v_n n (the lower body again fixed where
-// the positions treated it so):
-//   restitution: dv = n (-v_n + max(-e vbar_n, 0)), vbar_n from the velocities before the
-//     substep; e = 0 where |vbar_n| <= 2 |g| h; the impulse dv / w (w along dv).
-//   dynamic friction: the speed change along -v_t is min(mu_d lambda_n w_t / h, |v_t|).
+// Per iteration, pair by pair in that order (Gauss-Seidel across pairs, Jacobi within a pair; a
+// pass's impulses are summed and applied at once, one move per body, so no order among them):
+//   normals: all of the pair's points from the same poses, dlambda_i = d_i / w_i, scaled by the
+//     step s that fits the depths best: with dd_j the change of point j's depth under all the
+//     impulses together (the bodies' linear response), s = sum d_j dd_j / sum dd_j^2, at most 1.
+//     A face seen from both sides would otherwise be pushed twice as far, and the passes would
+//     swing; a single point keeps s = 1. Again until no point is deeper than 1e-12 m (at most 32
+//     passes).
+//   static friction, in the cone of the pair, |lambda_t| < mu_s lambda_n, with the relative slip
+//     of two contact points since the substep began, dp = (P_a - P_a,prev) - (P_b - P_b,prev)
+//     (each from its body-frame point and its body's pose at the start):
+//     - a face (3 points or more) as the world's face: one constraint at the points' centre
+//       (weighted by lambda_n) that moves the bodies along the surface and turns them about n
+//       only, w_t = sum over the two of 1/m + ((r x t).n)^2 n^T I^-1 n; then the relative turn
+//       about n since the substep began undone within mu_s lambda_n rho. Friction at the corners,
+//       below the centre of mass, tipped each box of a 10-box stack a little, and the stack
+//       amplified it until it fell (measured); the face's constraint cannot tip.
+//     - else each point's impulse -|dp_t| / w_t t (t = dp_t / |dp_t|), with the best step.
+//   Stacks (shock propagation, Guendelman et al. 2003): a pair whose pushing direction (its
+//     normals weighted by their depths) is within 45 degrees of the vertical, with its lower body
+//     resting (it touched the world in this substep, or rests on a resting body, found in this
+//     same bottom-up order), treats that lower body as fixed (w = 0, not moved): the ground
+//     carries what lands on it. A pair in the air, or side by side, keeps both masses: its
+//     momentum is conserved.
+// After the velocity update, per touching pair (the lower body again fixed where the positions
+// treated it so), with v_rel = (v_a + omega_a x r_a) - (v_b + omega_b x r_b) at each point:
+//   restitution: every point's normal speed change dv = -v_n + max(-e vbar_n, 0) at once (vbar_n
+//     from the velocities before the substep; e = 0 where |vbar_n| <= 2 |g| h), with the best
+//     step, until none is off by more than 1e-12 m/s.
+//   dynamic friction: each point's speed change along -v_t, min(mu_d lambda_n w_t / h, |v_t|), at
+//     once with the best step.
 // Materials: static and dynamic friction mixed as the world contacts mix them, the geometric mean
 // sqrt(mu_a mu_b); restitution the larger of the two bodies' (a world surface's is 0, so against
 // the world the body's own counts, as here against a body of restitution 0).
@@ -68,11 +72,11 @@ namespace seiche::rigid {
 class BodyContacts {
  public:
   BodyContacts() = default;
-  /// The scene's bodies; `jointed`: the pairs of body indices a joint joins (no contact between
-  /// them).
+  /// The scene's bodies; `jointed`: the pairs of body indices that never touch (rigid_family.cpp:
+  /// joined by a joint, or in one articulation).
   BodyContacts(const SceneDef& scene, const std::vector<std::pair<int, int>>& jointed, double substep);
 
-  /// No pair of bodies can touch: the passes are left out.
+  /// No pair of bodies can touch: nothing to do.
   bool empty() const { return candidates_.empty(); }
   /// Before the bodies' predict: their velocities before the substep, the multipliers reset.
   void begin_substep(const std::vector<RigidBody>& bodies);
