@@ -13,11 +13,9 @@ namespace seiche::rigid {
 namespace {
 
 // As for the world contacts (world_contacts.cpp): the normals' Jacobi passes stop where no point
-// is deeper than kResolved (m), or after kNormalPasses; a pair is near where its centres are
-// closer than kNearMargin times the sum of the bodies' extents.
+// is deeper than kResolved (m), or after kNormalPasses.
 constexpr double kResolved = 1e-12;
 constexpr int kNormalPasses = 32;
-constexpr double kNearMargin = 1.5;
 // Shock propagation: a normal within 45 degrees of the vertical.
 const double kSupportCosine = std::sqrt(0.5);
 
@@ -70,6 +68,7 @@ BodyContacts::BodyContacts(const SceneDef& scene, const std::vector<std::pair<in
     bodies_.push_back(b);
   }
   resting_.resize(count);
+  reach_.resize(count);
   v_before_.resize(count);
   omega_before_.resize(count);
 }
@@ -82,19 +81,24 @@ void BodyContacts::begin_substep(const std::vector<RigidBody>& bodies) {
 void BodyContacts::find_pairs(const std::vector<RigidBody>& bodies) {
   active_.clear();
   slots_.clear();
-  for (const auto& [i, j] : candidates_) {
+  // Each body's bounding ball grown by what it moves in a substep (the corrections within it are
+  // small: a contact they would cause is found in the next substep).
+  for (std::size_t k = 0; k < bodies.size(); ++k) reach_[k] = bodies_[k].extent + length(bodies[k].v) * h_;
+  for (std::size_t candidate = 0; candidate < candidates_.size(); ++candidate) {
+    const auto [i, j] = candidates_[candidate];
     const RigidBody &a = bodies[std::size_t(i)], &b = bodies[std::size_t(j)];
-    const double reach = kNearMargin * (bodies_[std::size_t(i)].extent + bodies_[std::size_t(j)].extent);
+    const double reach = reach_[std::size_t(i)] + reach_[std::size_t(j)];
     const Vec3d d = a.x - b.x;
     if (!(dot(d, d) < reach * reach)) continue;
     Active pair;
-    pair.a = i, pair.b = j;
+    pair.a = i, pair.b = j, pair.candidate = int(candidate);
     pair.height = std::min(dot(a.x, up_), dot(b.x, up_));
     active_.push_back(pair);
   }
   // From the lowest pair up; ties (and no gravity) in the candidates' order (stable).
-  std::stable_sort(active_.begin(), active_.end(),
-                   [](const Active& p, const Active& q) { return p.height < q.height; });
+  std::sort(active_.begin(), active_.end(), [](const Active& p, const Active& q) {
+    return p.height != q.height ? p.height < q.height : p.candidate < q.candidate;
+  });
   for (Active& pair : active_) {
     pair.first_slot = int(slots_.size());
     for (const auto& [body, of_a] : {std::pair{pair.a, true}, std::pair{pair.b, false}})
@@ -108,9 +112,11 @@ void BodyContacts::find_pairs(const std::vector<RigidBody>& bodies) {
   pairs_found_ = true;
 }
 
-void BodyContacts::solve_positions(std::vector<RigidBody>& bodies, const std::vector<char>& on_world) {
+void BodyContacts::solve_positions(std::vector<RigidBody>& bodies, const WorldContacts& world) {
   if (!pairs_found_) find_pairs(bodies);
-  for (std::size_t k = 0; k < bodies.size(); ++k) resting_[k] = on_world[k] || bodies[k].fixed();
+  if (active_.empty()) return;
+  world.touched(resting_);
+  for (std::size_t k = 0; k < bodies.size(); ++k) resting_[k] = resting_[k] || bodies[k].fixed();
   for (Active& pair : active_) solve_pair(pair, bodies[std::size_t(pair.a)], bodies[std::size_t(pair.b)]);
 }
 

@@ -17,9 +17,10 @@
 // ball into a: n = -m, P_b = c - rho m, P_a = P_b + d m.
 //
 // Broad phase, once a substep on the predicted poses: every pair of bodies not joined by a joint
-// nor in one articulation (rigid_family.cpp) and not both fixed whose centres are closer than 1.5
-// times the sum of their extents, visited in a fixed order: from the lowest (along -gravity, the
-// lower of the pair's two centres) up, ties in the pairs' order. Serial: the same bits on any
+// nor in one articulation (rigid_family.cpp) and not both fixed whose bounding balls (their
+// extents), grown by what they move in a substep ((|v_a| + |v_b|) h), overlap, visited in a fixed
+// order: from the lowest (along -gravity, the lower of the pair's two centres) up, ties in the
+// pairs' order. Serial: the same bits on any
 // thread count. A scene with no such pair does nothing more.
 //
 // Per iteration, pair by pair in that order (Gauss-Seidel across pairs, Jacobi within a pair; a
@@ -82,9 +83,9 @@ class BodyContacts {
   bool empty() const { return candidates_.empty(); }
   /// Before the bodies' predict: their velocities before the substep, the multipliers reset.
   void begin_substep(const std::vector<RigidBody>& bodies);
-  /// One iteration of the positional pass; `on_world[k]`: body k touched the static world in this
-  /// substep.
-  void solve_positions(std::vector<RigidBody>& bodies, const std::vector<char>& on_world);
+  /// One iteration of the positional pass; `world` tells which bodies touched the static world in
+  /// this substep (they rest: shock propagation).
+  void solve_positions(std::vector<RigidBody>& bodies, const WorldContacts& world);
   /// After the velocity update: restitution and dynamic friction.
   void solve_velocities(std::vector<RigidBody>& bodies);
 
@@ -105,6 +106,7 @@ class BodyContacts {
   };
   struct Active {  // a pair near enough in this substep
     int a = 0, b = 0;
+    int candidate = 0;  // its index in candidates_ (the order of ties)
     int first_slot = 0, end_slot = 0;
     double height = 0.0;    // the lower centre along -gravity
     int fixed = 0;          // shock propagation in the last normal pass: 1 a, 2 b treated as fixed, 0 neither
@@ -143,7 +145,8 @@ class BodyContacts {
   std::vector<std::pair<int, int>> candidates_;            // pairs that may touch, a < b
   std::vector<Active> active_;
   std::vector<Slot> slots_;
-  std::vector<char> resting_;  // per body, within an iteration: on the world or on a resting body
+  std::vector<char> resting_;  // per body, within an iteration: fixed, on the world or on a resting body
+  std::vector<double> reach_;  // per body, within find_pairs: its extent + |v| h
   std::vector<Vec3d> v_before_, omega_before_;
   std::vector<Touch> touches_;  // scratch: one pass's impulses
   Vec3d up_;                // -gravity, unit (zero without gravity)

@@ -162,9 +162,7 @@ void RigidFamily::add_passes(std::vector<Pass>& passes) {
   // With the world, then between bodies (which reads which bodies the world holds).
   passes.push_back({"body contacts", Stage::Iterate, pass_order::kBodyContacts, true, [this](const StepContext&) {
                       contacts_.solve_positions(bodies_);
-                      if (body_contacts_.empty()) return;
-                      contacts_.touched(on_world_);
-                      body_contacts_.solve_positions(bodies_, on_world_);
+                      if (!body_contacts_.empty()) body_contacts_.solve_positions(bodies_, contacts_);
                     }});
   passes.push_back({"body contact velocities", Stage::Update, pass_order::kBodyContactVelocities, true,
                     [this](const StepContext&) {

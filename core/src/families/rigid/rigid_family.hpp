@@ -60,7 +60,6 @@ class RigidFamily final : public Family {
   rigid::JointSolver joints_;
   rigid::WorldContacts contacts_;  // with the domain's walls and the colliders
   rigid::BodyContacts body_contacts_;  // between bodies
-  std::vector<char> on_world_;         // scratch: per body, it touched the world in this substep
   rigid::Vec3d gravity_;
   rigid::Vec3d lowest_corner_;
   double h_;             // the substep (s), in double: frame_dt / substeps
