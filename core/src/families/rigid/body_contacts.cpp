@@ -5,8 +5,8 @@
 #include <cmath>
 
 #include "body_correction.hpp"
-#include "box_box.hpp"
 #include "body_shape.hpp"
+#include "box_box.hpp"
 
 namespace seiche::rigid {
 
@@ -22,7 +22,6 @@ const double kSupportCosine = std::sqrt(0.5);
 enum FixedSide : int { kNeither = 0, kFixedA = 1, kFixedB = 2 };
 
 double mixed(double a, double b) { return std::sqrt(a * b); }
-
 
 // The generalized inverse mass of the pair at levers r_a, r_b along unit n, a side treated as
 // fixed counting 0.
@@ -95,7 +94,7 @@ void BodyContacts::find_pairs(const std::vector<RigidBody>& bodies) {
     pair.height = std::min(dot(a.x, up_), dot(b.x, up_));
     active_.push_back(pair);
   }
-  // From the lowest pair up; ties (and no gravity) in the candidates' order (stable).
+  // From the lowest pair up; ties (and every pair without gravity) in the candidates' order.
   std::sort(active_.begin(), active_.end(), [](const Active& p, const Active& q) {
     return p.height != q.height ? p.height < q.height : p.candidate < q.candidate;
   });
@@ -191,8 +190,8 @@ void BodyContacts::solve_pair(Active& pair, RigidBody& a, RigidBody& b) {
   if (!touched) return;
   // What rests on a resting body rests too (for the pairs above it, later in the order).
   if (supports) resting_[std::size_t(pair.a)] = resting_[std::size_t(pair.b)] = 1;
-  // Static friction: every touching point's impulse from the same poses, applied together with the
-  // best step, within the cone of the pair.
+  // Static friction, within the cone of the pair: a face as one patch (face_friction), else every
+  // touching point's impulse from the same poses, applied together with the best step.
   const double mu_s = mixed(body_a.static_friction, body_b.static_friction);
   if (!(mu_s > 0.0) || !(pair.lambda_n > 0.0)) return;
   if (face_friction(pair, a, b, mu_s)) return;
@@ -244,7 +243,7 @@ bool BodyContacts::face_friction(Active& pair, RigidBody& a, RigidBody& b, doubl
     if (slot.touching) spread += slot.lambda_n * length(a.world_point(slot.local_a) - centre);
   }
   spread /= weight;
-  const bool moves_a = pair.fixed != kFixedA, moves_b = pair.fixed != kFixedB;
+  const bool moves_a = pair.fixed != kFixedA && !a.fixed(), moves_b = pair.fixed != kFixedB && !b.fixed();
   // Along the surface: one constraint at the centre, moving the bodies along it and turning them
   // about n only (the normals hold the tipping).
   const RigidBody a0 = a, b0 = b;
