@@ -10,6 +10,7 @@
 #include "families/contact/contact_family.hpp"
 #include "families/distance/distance_family.hpp"
 #include "families/fluid/fluid_family.hpp"
+#include "families/fluid_body/fluid_body_family.hpp"
 #include "families/motion/motion_family.hpp"
 #include "families/rigid/rigid_family.hpp"
 #include "families/shape/shape_family.hpp"
@@ -87,6 +88,14 @@ void build_rigid(FamilyBuild& b) {
   b.add(std::make_unique<RigidFamily>(b.scene));
 }
 
+// Bodies in fluid: their boundary particles in the fluid's density (only with both sections).
+void build_fluid_body(FamilyBuild& b) {
+  FluidFamily* fluid = b.find<FluidFamily>();
+  RigidFamily* rigid = b.find<RigidFamily>();
+  if (fluid == nullptr || rigid == nullptr) return;
+  b.add(std::make_unique<FluidBodyFamily>(b.scene, b.store, *fluid, *rigid));
+}
+
 constexpr FamilyRow kRows[] = {
     {"motion", Phase::Particles, build_motion},
     {"particles", Phase::Particles, build_raw_particles},
@@ -97,6 +106,7 @@ constexpr FamilyRow kRows[] = {
     {"distance_constraints", Phase::OnParticles, build_distance},
     {"colliders", Phase::OnParticles, build_colliders},
     {"rigid_bodies", Phase::OnParticles, build_rigid, make_body_exporter},
+    {"rigid_bodies", Phase::OnParticles, build_fluid_body},
 };
 
 }  // namespace

@@ -10,6 +10,7 @@
 
 #include "body_mesh.hpp"
 #include "body_shape.hpp"
+#include "families/fluid_body/body_boundary.hpp"
 #include "rigid_reader.hpp"
 #include "scene/output_name.hpp"
 #include "scene/shared_keys.hpp"
@@ -173,6 +174,15 @@ void check_rigid_bodies(SceneDef& scene, const std::string& file) {
       fail(file, path + ".density",
            fmt::format("gives a body of {:.3g} kg (density * volume); the lightest allowed is {:g} kg", m.mass,
                        kMinBodyMass));
+    // With a fluid, the body is sampled into boundary particles at its spacing (fluid_body/).
+    if (!scene.fluids.empty()) {
+      const double lattice = fluid_body::boundary_lattice_size(body_shape_def(b), m.extent, scene.fluids[0].spacing);
+      if (lattice > fluid_body::kMaxBoundaryLattice)
+        fail(file, path,
+             fmt::format("is too large for the fluid's spacing {} m: its boundary particles would be sampled on a "
+                         "lattice of {:.0f} points; the limit is {:.0f}",
+                         scene.fluids[0].spacing, lattice, fluid_body::kMaxBoundaryLattice));
+    }
     if (!inside(b.position, scene.domain))
       fail(file, path + ".position",
            fmt::format("{} lies outside the domain {}", format_vec(b.position), format_domain(scene.domain)));

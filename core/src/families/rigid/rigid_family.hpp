@@ -20,6 +20,8 @@
 // Error rows: "joint_drift" (each joint's positional error, JointSolver::error, relative to its
 // length), "joint_angle_error" (radians; hinge, fixed and slider joints), "body_energy" (|E - E_0| / E_0, E the bodies' kinetic plus
 // gravitational energy, zero at the domain's lowest corner as for the particles).
+// With a fluid, the fluid_body family (families/fluid_body/) couples the bodies and the fluid
+// both ways through mutable_bodies().
 #pragma once
 
 #include <vector>
@@ -43,6 +45,9 @@ class RigidFamily final : public Family {
   void restore_state(const CheckpointChunks& chunks) override;
 
   const std::vector<rigid::RigidBody>& bodies() const { return bodies_; }
+  /// For the families coupled to the bodies (the fluid's boundary): they correct the bodies
+  /// through body_correction.hpp.
+  std::vector<rigid::RigidBody>& mutable_bodies() { return bodies_; }
   const rigid::JointSolver& joints() const { return joints_; }
   /// Every body's position, orientation and velocities now, in scene order.
   std::vector<BodyPose> poses() const;

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "body_shape.hpp"
+#include "body_surface.hpp"
 #include "families/collider/collider_family.hpp"
 
 namespace seiche::rigid {
@@ -57,6 +59,40 @@ WorldSurfaces::WorldSurfaces(const SceneDef& scene) {
     }
     surfaces_.push_back(s);
   }
+}
+
+WorldSurfaces WorldSurfaces::of_body_shape(const RigidBodyDef& def, const std::string& json_path) {
+  const ShapeDims dims = body_shape_def(def);
+  WorldSurfaces solid;
+  Surface s;
+  switch (dims.shape) {
+    case BodyShape::Box: s.shape = ColliderDef::Shape::Box, s.a = -0.5 * dims.size, s.b = 0.5 * dims.size; break;
+    case BodyShape::Sphere: s.shape = ColliderDef::Shape::Sphere, s.radius = dims.radius; break;
+    case BodyShape::Capsule:
+      s.shape = ColliderDef::Shape::Capsule, s.radius = dims.radius;
+      s.a = {0.0, -0.5 * dims.length, 0.0}, s.b = {0.0, 0.5 * dims.length, 0.0};
+      break;
+    case BodyShape::Mesh: {
+      const BodySurface surface = body_surface(def);
+      ClothMesh mesh;
+      for (const Vec3d& v : surface.vertices) mesh.positions.push_back({float(v.x), float(v.y), float(v.z)});
+      mesh.triangles = surface.triangles;
+      float extent = 0.0f;
+      for (int a = 0; a < 3; ++a) {
+        float lo = INFINITY, hi = -INFINITY;
+        for (const Vec3& x : mesh.positions) lo = std::min(lo, x[a]), hi = std::max(hi, x[a]);
+        extent = std::max(extent, hi - lo);
+      }
+      const float voxel = std::max(extent / 64.0f, 1e-6f);
+      auto sdf = std::make_shared<MeshSdf>();
+      build_mesh_sdf(mesh, voxel, 4.0f * voxel, def.mesh.file, json_path + ".mesh", *sdf);
+      s.shape = ColliderDef::Shape::Mesh, s.sdf = sdf.get();
+      solid.mesh_sdfs_.push_back(std::move(sdf));
+      break;
+    }
+  }
+  solid.surfaces_.push_back(s);
+  return solid;
 }
 
 bool WorldSurfaces::penetration(int surface, Vec3d p, double r, SurfacePenetration& out) const {

@@ -12,6 +12,8 @@
 //          d = r - (sdf(c) + |p - c|), n = grad sdf(c)  (an upper bound of sdf(p), equal above a face)
 // A contact is d > 0. Each surface has its Coulomb friction (the domain's `friction` for the
 // walls, the collider's own).
+// The same queries answer for a rigid body's own solid in its body frame (of_body_shape): the
+// fluid's particles are kept out of the bodies with them (families/fluid_body/).
 #pragma once
 
 #include <memory>
@@ -32,6 +34,11 @@ class WorldSurfaces {
  public:
   WorldSurfaces() = default;
   explicit WorldSurfaces(const SceneDef& scene);
+  /// Body `def`'s solid shape in its own body frame, as surface 0 (no walls): a box
+  /// [-size/2, size/2], a sphere or capsule about the origin (the capsule's segment along y), a
+  /// mesh through the signed distance field of its body-frame surface (body_surface.hpp; voxel: a
+  /// 64th of its largest side). `json_path` ("rigid_bodies[k]") names it in a mesh's errors.
+  static WorldSurfaces of_body_shape(const RigidBodyDef& def, const std::string& json_path);
 
   int count() const { return int(surfaces_.size()); }
   double friction(int surface) const { return surfaces_[std::size_t(surface)].friction; }
