@@ -4,12 +4,12 @@
 #include <algorithm>
 #include <cmath>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include "families/rigid/body_correction.hpp"
 #include "seiche/kernels/blocked_reduce.hpp"
 #include "seiche/kernels/sph_kernels.hpp"
-
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 
 namespace seiche {
 
