@@ -35,6 +35,7 @@
 #include "seiche/scene_loader.hpp"
 #include "seiche/simulation.hpp"
 #include "seiche/thread_count.hpp"
+#include "test_temp_dir.hpp"
 
 using namespace seiche;
 using namespace seiche::rigid;
@@ -368,7 +369,7 @@ struct Resumed {
 };
 
 Resumed resume_from_checkpoint(const SceneDef& scene, const std::string& name, int at, int more) {
-  const fs::path dir = fs::temp_directory_path() / name;
+  const fs::path dir = testing_support::temp_path(name);
   fs::remove_all(dir);
   fs::create_directories(dir);
   const fs::path file = dir / "checkpoint.bin";
@@ -566,7 +567,7 @@ void expect_tensor_near(const Tensor& a, const Tensor& b, double tolerance) {
 
 // Writes the mesh as an OBJ under the temporary folder and returns its path.
 fs::path write_obj(const std::string& name, const std::vector<Vec3d>& v, const Triangles& t) {
-  const fs::path path = fs::temp_directory_path() / ("seiche_body_" + name + ".obj");
+  const fs::path path = testing_support::temp_path("seiche_body_" + name + ".obj");
   std::string text;
   for (const Vec3d& p : v) text += fmt::format("v {} {} {}\n", p.x, p.y, p.z);
   for (const auto& f : t) text += fmt::format("f {} {} {}\n", f[0] + 1, f[1] + 1, f[2] + 1);

@@ -23,6 +23,7 @@
 #include "seiche/simulation.hpp"
 #include "seiche/state_hash.hpp"
 #include "seiche/thread_count.hpp"
+#include "test_temp_dir.hpp"
 
 using namespace seiche;
 namespace fs = std::filesystem;
@@ -204,7 +205,7 @@ TEST(ShapeMatching, SameBitsAtEveryThreadCount) {
 
 TEST(ShapeMatching, CheckpointContinuesBitForBitWithItsRotations) {
   const SceneDef scene = box_scene();
-  const fs::path dir = fs::temp_directory_path() / "seiche_shape_checkpoint";
+  const fs::path dir = testing_support::temp_path("seiche_shape_checkpoint");
   fs::remove_all(dir);
   fs::create_directories(dir);
   const fs::path file = dir / "checkpoint.bin";
@@ -401,7 +402,7 @@ TEST(ShapeMatching, SpheresAndVoxelizedMeshesHaveTheirLatticesParticles) {
   EXPECT_NEAR(ico_volume, 0.94 * ball_volume, 0.08 * ball_volume);
 
   // An open mesh (the cube without its top) is refused, naming the OBJ and the field.
-  const fs::path open = fs::temp_directory_path() / "seiche_shape_open.obj";
+  const fs::path open = testing_support::temp_path("seiche_shape_open.obj");
   {
     std::ofstream f(open);
     f << "v -0.5 -0.5 -0.5\nv 0.5 -0.5 -0.5\nv -0.5 0.5 -0.5\nv 0.5 0.5 -0.5\nv -0.5 -0.5 0.5\nv 0.5 -0.5 0.5\n"
@@ -451,7 +452,7 @@ TEST(ShapeMatching, PlasticRegionBodiesKeepTheirBitsAcrossThreadsAndCheckpoints)
   EXPECT_EQ(run(2), one);
   EXPECT_EQ(run(3), one);
 
-  const fs::path dir = fs::temp_directory_path() / "seiche_shape_plastic_checkpoint";
+  const fs::path dir = testing_support::temp_path("seiche_shape_plastic_checkpoint");
   fs::remove_all(dir);
   fs::create_directories(dir);
   const fs::path file = dir / "checkpoint.bin";
