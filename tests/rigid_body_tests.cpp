@@ -22,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "families/collider/collider_family.hpp"
 #include "families/rigid/body_mesh.hpp"
 #include "families/rigid/body_shape.hpp"
 #include "families/rigid/body_surface.hpp"
@@ -1102,6 +1103,32 @@ TEST(Contacts, BallRestsOnEveryColliderShape) {
   EXPECT_NEAR(p[2].position[1], 0.3, 1e-6);
   EXPECT_NEAR(p[3].position[1], 0.35, 2e-3);
   for (const BodyPose& b : p) EXPECT_LT(std::hypot(b.velocity[0], b.velocity[1], b.velocity[2]), 1e-6);
+}
+
+// A mesh collider's signed distance field is built once, by the collider family, and the bodies'
+// contacts hold that same field (a second build would leave the collider family its only owner);
+// a rigid family given no field for a mesh collider is refused.
+TEST(Contacts, MeshCollidersFieldIsBuiltOnceAndShared) {
+  const SceneDef scene = load_scene_text(R"({
+    "domain": {"min": [-2, -1, -1], "max": [2, 2, 1]},
+    "colliders": [{"sphere": {"center": [-0.4, 0, 0], "radius": 0.3}},
+                  {"mesh": {"file": ")" + std::string(SEICHE_SCENES_DIR) + R"(/meshes/cube.obj", "scale": 0.5}},
+                  {"mesh": {"file": ")" + std::string(SEICHE_SCENES_DIR) + R"(/meshes/icosphere.obj", "scale": 0.2,
+                            "translate": [1, 0, 0]}}],
+    "rigid_bodies": [{"name": "ball", "shape": "sphere", "radius": 0.1, "position": [1, 0.55, 0]}]
+  })",
+                                         "shared_fields.json");
+  ParticleStore store;
+  const ColliderFamily colliders(scene, store);
+  ASSERT_EQ(colliders.mesh_fields().size(), 2u);
+  for (const auto& field : colliders.mesh_fields()) EXPECT_EQ(field.use_count(), 1);
+  {
+    const RigidFamily bodies(scene, colliders.mesh_fields());
+    for (const auto& field : colliders.mesh_fields()) EXPECT_EQ(field.use_count(), 2);
+  }
+  for (const auto& field : colliders.mesh_fields()) EXPECT_EQ(field.use_count(), 1);
+  EXPECT_THROW(RigidFamily{scene}, std::invalid_argument);
+  EXPECT_THROW(RigidFamily(scene, std::span(colliders.mesh_fields()).first(1)), std::invalid_argument);
 }
 
 // Boxes, a capsule and balls thrown tumbling into the domain's corner, with friction and

@@ -82,9 +82,12 @@ void build_distance(FamilyBuild& b) {
 void build_colliders(FamilyBuild& b) { b.add(std::make_unique<ColliderFamily>(b.scene, b.store)); }
 
 // Rigid bodies are not particles: they have their own state, and their joints join only them.
+// Their contacts share the mesh colliders' fields that the colliders' row built.
 void build_rigid(FamilyBuild& b) {
   if (b.scene.rigid_bodies.empty()) return;
-  b.add(std::make_unique<RigidFamily>(b.scene));
+  const ColliderFamily* colliders = b.find<ColliderFamily>();
+  b.add(std::make_unique<RigidFamily>(
+      b.scene, colliders ? std::span(colliders->mesh_fields()) : std::span<const std::shared_ptr<const MeshSdf>>()));
 }
 
 constexpr FamilyRow kRows[] = {

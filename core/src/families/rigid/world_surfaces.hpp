@@ -15,6 +15,7 @@
 #pragma once
 
 #include <memory>
+#include <span>
 #include <vector>
 
 #include "families/collider/mesh_sdf.hpp"
@@ -31,7 +32,10 @@ struct SurfacePenetration {
 class WorldSurfaces {
  public:
   WorldSurfaces() = default;
-  explicit WorldSurfaces(const SceneDef& scene);
+  /// The domain's walls and the scene's colliders; `mesh_fields` holds the fields of its mesh
+  /// colliders, one per mesh collider in scene order (ColliderFamily::mesh_fields(): built once,
+  /// shared); std::invalid_argument when one is null or their count is not the mesh colliders'.
+  WorldSurfaces(const SceneDef& scene, std::span<const std::shared_ptr<const MeshSdf>> mesh_fields);
 
   int count() const { return int(surfaces_.size()); }
   double friction(int surface) const { return surfaces_[std::size_t(surface)].friction; }
