@@ -14,13 +14,14 @@ namespace seiche::testing_support {
 
 inline const std::filesystem::path& process_temp_dir() {
   struct Folder {
-    std::filesystem::path path =
-        std::filesystem::temp_directory_path() / ("seiche_tests_" + std::to_string(::getpid()));
+    pid_t owner = ::getpid();
+    std::filesystem::path path = std::filesystem::temp_directory_path() / ("seiche_tests_" + std::to_string(owner));
     Folder() {
       std::filesystem::remove_all(path);  // left by a crashed process that had the same id
       std::filesystem::create_directories(path);
     }
     ~Folder() {
+      if (::getpid() != owner) return;  // a forked child that exits leaves its parent's folder alone
       std::error_code ignored;
       std::filesystem::remove_all(path, ignored);
     }
