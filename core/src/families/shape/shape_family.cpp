@@ -165,10 +165,10 @@ void ShapeFamily::add_passes(std::vector<Pass>& passes) {
 }
 
 // The rigid fit of each cluster on the final positions x, and the RMS distance of its members
-// from it relative to the cluster's size (shape_family.hpp). The fit runs on compact copies of the members (positions,
-// inverse masses; one copy per member, so overlapping clusters are fitted each on its own) and
-// of the clusters, so that measuring changes nothing: not the store, not the rotations that
-// warm-start the next solve.
+// from it relative to the cluster's size (shape_family.hpp). The fit runs on compact copies of
+// the members (positions, inverse masses; one copy per member, so overlapping clusters are fitted
+// each on its own) and of the clusters, so that measuring changes nothing: not the store, not the
+// rotations that warm-start the next solve.
 void ShapeFamily::measure(FrameMetrics& m) {
   const ParticleStore& s = store_;
   const std::size_t members = clusters_.members();
