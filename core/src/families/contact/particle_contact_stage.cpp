@@ -30,6 +30,7 @@ ParticleContactStage::ParticleContactStage(const ClothSolver* cloth, const Scene
   // largest spacing.
   if (with_shapes_)
     for (const ShapeDef& shape : scene.shapes) max_distance_ = std::max(max_distance_, shape.spacing);
+  shape_count_ = with_shapes_ ? scene.shapes.size() : 0;
   for (int a = 0; a < 3; ++a) domain_min_[a] = scene.domain.min[a], domain_max_[a] = scene.domain.max[a];
 }
 
@@ -115,14 +116,17 @@ void ParticleContactStage::find_candidates(const ParticleStore& store, const Nei
   const std::size_t n = store.size();
   // The grid: cloth particles, and shape particles where shapes touch, sorted by cell into
   // sorted_ (the store stays as it is).
+  if (with_shapes_) find_shape_partner_boxes(store);
   in_grid_.resize(n);
   grid_particles_.clear();
   for (std::size_t i = 0; i < n; ++i) {
     const Material m = phase_material(store.phase[i]);
-    const bool in = m == Material::Cloth || (with_shapes_ && m == Material::Shape);
+    const bool in = m == Material::Cloth || (with_shapes_ && m == Material::Shape && near_a_partner(store, i));
     in_grid_[i] = in ? 1 : 0;
     if (in) grid_particles_.push_back(std::uint32_t(i));
   }
+  contacts_.clear();
+  if (grid_particles_.empty()) return;  // shapes far apart, no cloth: nothing to touch
   // The grid spans its particles' box (clamped to the domain grown by a cell: particles outside
   // share the border cells), with cells of twice the largest candidate distance (a query scans
   // 2 x 2 x 2 cells). A draped sheet fills its box sparsely, so the grid gets up to 32 cells per
@@ -169,7 +173,6 @@ void ParticleContactStage::find_candidates(const ParticleStore& store, const Nei
 
   // The contact list: grid particles with candidates, then the fluid particles they touch,
   // each fluid particle's cloth partners in cloth order (a transpose of the cloth lists).
-  contacts_.clear();
   struct FluidPair {
     std::uint32_t fluid, cloth;
     float distance;
@@ -198,6 +201,44 @@ void ParticleContactStage::find_candidates(const ParticleStore& store, const Nei
     contacts_.distance.push_back(fluid_pairs[e].distance);
   }
   if (!fluid_pairs.empty()) contacts_.start.push_back(std::uint32_t(contacts_.partner.size()));
+}
+
+// The boxes of the shapes (one each) and of all the cloth (the last), around their predicted
+// positions, grown by the largest candidate distance; per shape, the other boxes its own meets.
+void ParticleContactStage::find_shape_partner_boxes(const ParticleStore& store) {
+  boxes_.assign(shape_count_ + 1, Box{});
+  for (std::size_t i = 0; i < store.size(); ++i) {
+    const Material m = phase_material(store.phase[i]);
+    if (m != Material::Cloth && m != Material::Shape) continue;
+    Box& box = boxes_[m == Material::Cloth ? shape_count_ : std::size_t(store.phase[i] >> 8)];
+    const float p[3] = {store.px[i], store.py[i], store.pz[i]};
+    for (int a = 0; a < 3; ++a) box.lo[a] = std::min(box.lo[a], p[a]), box.hi[a] = std::max(box.hi[a], p[a]);
+  }
+  const float grow = kCandidateMargin * max_distance_;
+  for (Box& box : boxes_)
+    for (int a = 0; a < 3; ++a) box.lo[a] -= grow, box.hi[a] += grow;
+  auto meet = [](const Box& a, const Box& b) {
+    for (int k = 0; k < 3; ++k)
+      if (!(a.lo[k] <= b.hi[k] && b.lo[k] <= a.hi[k])) return false;  // apart (or empty, or NaN)
+    return true;
+  };
+  partner_boxes_.assign(shape_count_, {});
+  for (std::size_t c = 0; c < shape_count_; ++c)
+    for (std::size_t k = 0; k < boxes_.size(); ++k)
+      if (k != c && meet(boxes_[c], boxes_[k])) partner_boxes_[c].push_back(std::uint32_t(k));
+}
+
+// Whether shape particle i lies in the grown box of another shape or of the cloth: a particle
+// outside every such box is farther than any candidate distance from every partner it could have.
+bool ParticleContactStage::near_a_partner(const ParticleStore& store, std::size_t i) const {
+  const float p[3] = {store.px[i], store.py[i], store.pz[i]};
+  for (std::uint32_t k : partner_boxes_[store.phase[i] >> 8]) {
+    const Box& box = boxes_[k];
+    if (box.lo[0] <= p[0] && p[0] <= box.hi[0] && box.lo[1] <= p[1] && p[1] <= box.hi[1] && box.lo[2] <= p[2] &&
+        p[2] <= box.hi[2])
+      return true;
+  }
+  return false;
 }
 
 void ParticleContactStage::solve(const kernels::ParticleView& p) {

@@ -10,7 +10,8 @@
 //                              of each shape's spacing); a shape's own particles never touch
 //   shape-cloth                always; contact distance = half the shape's spacing + half the
 //                              cloth's thickness
-// Cloth and shape particles go into a grid of their own (the store is not reordered for it);
+// Cloth particles, and shape particles within reach of another shape's or a cloth's box, go into
+// a grid of their own (the store is not reordered for it);
 // fluid partners are found in the fluid's neighbor grid. A pair is a candidate when closer than
 // kCandidateMargin times its contact distance, so contacts that close during the iterations
 // are not missed. Lists are in a fixed order: results do not depend on the thread count.
@@ -18,6 +19,7 @@
 // its own: two shapes in a scene without cloth slide on each other without friction).
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -53,12 +55,23 @@ class ParticleContactStage {
   void solve(const kernels::ParticleView& p);
 
  private:
+  void find_shape_partner_boxes(const ParticleStore& store);
+  bool near_a_partner(const ParticleStore& store, std::size_t i) const;
   template <class Visit>
   void visit_candidates(const ParticleStore& store, const Neighborhood* fluid, std::uint32_t i, Visit&& visit) const;
 
   const ClothSolver* cloth_;  // null without cloth
   float fluid_radius_ = 0.0f;
   bool with_shapes_ = false;  // shape particles are in the grid (shapes_touch)
+  std::size_t shape_count_ = 0;  // with shapes: the scene's shapes
+  // With shapes, per substep: a box per shape and one for all the cloth (the last), around their
+  // particles grown by the largest candidate distance; per shape, the other boxes that meet its
+  // own. Only a shape particle inside one of those goes into the grid (near_a_partner).
+  struct Box {
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  };
+  std::vector<Box> boxes_;
+  std::vector<std::vector<std::uint32_t>> partner_boxes_;
   float max_distance_ = 0.0f;  // largest contact distance between grid particles
   float friction_ = 0.0f;
   float domain_min_[3] = {0, 0, 0}, domain_max_[3] = {0, 0, 0};
