@@ -1544,3 +1544,30 @@ TEST(ParticleBodyContacts, OnlyScenesWithBodiesAndClothOrShapesHaveThePasses) {
   EXPECT_TRUE(has_pass(cloth_over_box_scene()));
   EXPECT_FALSE(has_pass(load_scene_file(std::string(SEICHE_SCENES_DIR) + "/cloth_drape.json")));
 }
+
+// A rigid shape-matched box (0.1 m, spacing 0.025: radius 12.5 mm) dropped on a mesh body (the
+// 0.3 m cube of scenes/meshes, its field's voxel 4.7 mm) standing on the floor: after every frame
+// no particle's ball reaches into the cube by more than 2 mm, and at the end the box lies on the
+// cube's top (its lowest particles a radius above it, within 2 mm), the cube where it stood.
+TEST(ParticleBodyContacts, ShapeRestsOnAMeshBody) {
+  const std::string cube = std::string(SEICHE_SCENES_DIR) + "/meshes/cube.obj";
+  const SceneDef scene = load_scene_text(fmt::format(R"({{
+    "solver": {{"substeps": 16, "iterations": 8}},
+    "domain": {{"min": [-1, 0, -1], "max": [1, 2, 1], "friction": 0.5}},
+    "rigid_bodies": [{{"name": "cube", "shape": "mesh", "mesh": {{"file": "{}", "scale": 0.3}}, "position": [0, 0.15, 0]}}],
+    "shapes": [{{"box": {{"min": [-0.04, 0.45, -0.06], "max": [0.06, 0.55, 0.04]}}, "spacing": 0.025, "density": 400}}]
+  }})", cube), "shape_on_mesh.json");
+  Simulation sim(scene);
+  const Vec3d size{0.3, 0.3, 0.3};
+  for (int f = 1; f <= 60; ++f) {
+    ASSERT_EQ(sim.step_frame().non_finite, 0u);
+    const ParticleStore& s = sim.particles();
+    for (std::size_t i = 0; i < s.size(); ++i)
+      ASSERT_LT(depth_in_box(sim.body_poses()[0], size, {s.x[i], s.y[i], s.z[i]}, s.radius[i]), 2e-3) << "frame " << f;
+  }
+  const ParticleStore& s = sim.particles();
+  double lowest = INFINITY;
+  for (std::size_t i = 0; i < s.size(); ++i) lowest = std::min(lowest, double(s.y[i]));
+  EXPECT_NEAR(lowest, 0.3 + 0.0125, 2e-3);
+  EXPECT_NEAR(sim.body_poses()[0].position[1], 0.15, 1e-3);
+}
