@@ -93,9 +93,17 @@ void ParticleBodyContacts::find_candidates() {
     if (!touches_bodies(phase_material(s.phase[i]))) continue;
     const Vec3d p{double(s.px[i]), double(s.py[i]), double(s.pz[i])};
     for (std::size_t k = 0; k < bodies_.size(); ++k) {
-      const double reach = kReachFactor * solids_[k].extent + kReachRadii * double(s.radius[i]);
+      const Solid& solid = solids_[k];
+      const double margin = kReachRadii * double(s.radius[i]) + kReachFraction * solid.extent;
       const Vec3d d = p - bodies_[k].x;
-      if (dot(d, d) < reach * reach) candidates_.push_back({std::uint32_t(i), std::uint32_t(k)});
+      const double reach = solid.extent + margin;
+      if (!(dot(d, d) < reach * reach)) continue;
+      // Within reach of the solid itself (a mesh's field is asked only near its band: its
+      // bounding ball is the test).
+      rigid::SurfacePenetration pen;
+      if (solid.surface.shape == ColliderDef::Shape::Mesh ||
+          rigid::penetration(solid.surface, rotate_back(bodies_[k].q, d), double(s.radius[i]) + margin, pen))
+        candidates_.push_back({std::uint32_t(i), std::uint32_t(k)});
     }
   }
 }

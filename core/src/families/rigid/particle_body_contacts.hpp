@@ -21,8 +21,9 @@
 // takes the body's.
 //
 // Candidates: once per substep (Neighbors stage, after the bodies' predict and the fluid's
-// reorder), every cloth and shape particle whose predicted centre lies within the body's bounding
-// ball grown by kReachFactor and 3 particle radii, in store order, body by body in scene order.
+// reorder), every cloth and shape particle whose predicted ball, grown by 3 of its radii and a
+// tenth of the body's extent (what the particle and the body may move in the iterations), reaches
+// into the body's solid, in store order, body by body in scene order.
 // The solve, every iteration after the shape matching and before the joints and the bodies' world
 // contacts (pass_order::kParticleBodyContacts), goes through the list serially, Gauss-Seidel in
 // that fixed order: the same bits at any thread count. Nothing is carried across substeps (the
@@ -44,10 +45,11 @@ namespace seiche {
 
 class ParticleBodyContacts final : public Family {
  public:
-  /// A particle is a candidate of a body within kReachFactor times the body's extent plus
-  /// kReachRadii of its own radii from the body's centre.
-  static constexpr double kReachFactor = 1.25;
+  /// A particle is a candidate of a body when its ball, grown by kReachRadii of its radii and
+  /// kReachFraction of the body's extent, reaches into the body's solid (a mesh body: into the
+  /// ball of its extent grown so).
   static constexpr double kReachRadii = 3.0;
+  static constexpr double kReachFraction = 0.1;
 
   /// Whether `scene` needs it: rigid bodies, and cloth or shapes.
   static bool needed(const SceneDef& scene);
