@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 
 #include <tbb/parallel_for.h>
 
@@ -47,21 +48,24 @@ void ParticleContactStage::visit_candidates(const ParticleStore& store, const Ne
   const std::uint32_t vi = i_cloth ? std::uint32_t(store.id[i] - cloth_->first_id(ci)) : 0;
   const float ti = i_cloth ? cloth_->thickness(ci) : 0.0f;
 
-  auto visit_grid = [&](std::uint32_t k) {
+  // With shapes in the grid or not (a compile-time flag, so that the cloth-only scan is the
+  // cloth-only code).
+  auto visit_grid = [&](std::uint32_t k, auto shapes_in_grid) {
+    constexpr bool kShapes = decltype(shapes_in_grid)::value;
     const std::uint32_t j = grid_.order()[k];
     if (j == i) return;
     const std::uint32_t cj = store.phase[j] >> 8;
-    const bool j_cloth = phase_material(store.phase[j]) == Material::Cloth;
-    const bool same_cloth = i_cloth && j_cloth && cj == ci;
+    bool same_cloth = false;
     float r;
-    if (i_cloth && j_cloth) {
-      if (same_cloth && !cloth_->self_collision(ci)) return;
-      r = same_cloth ? ti : 0.5f * (ti + cloth_->thickness(cj));
-    } else {
+    if (kShapes && !(i_cloth && phase_material(store.phase[j]) == Material::Cloth)) {
       // A shape with a cloth or with another shape: the sum of their collision radii (half a
       // shape's spacing, half a cloth's thickness). A shape's own particles never touch.
-      if (!i_cloth && !j_cloth && cj == ci) return;
+      if (!i_cloth && phase_material(store.phase[j]) == Material::Shape && cj == ci) return;
       r = store.radius[i] + store.radius[j];
+    } else {
+      same_cloth = cj == ci;
+      if (same_cloth && !cloth_->self_collision(ci)) return;
+      r = same_cloth ? ti : 0.5f * (ti + cloth_->thickness(cj));
     }
     const kernels::Float4& q = sorted_[k];
     const float dx = xi - q.x, dy = yi - q.y, dz = zi - q.z;
@@ -84,12 +88,19 @@ void ParticleContactStage::visit_candidates(const ParticleStore& store, const Ne
       lo[a] = std::int32_t(first);
       hi[a] = std::min(lo[a] + 1, s.dims[a] - 1);
     }
-    for (std::int32_t z = lo[2]; z <= hi[2]; ++z)
-      for (std::int32_t y = lo[1]; y <= hi[1]; ++y)
-        for (std::int32_t x = lo[0]; x <= hi[0]; ++x) {
-          const std::uint32_t cell = grid_.cell_index(x, y, z);
-          for (std::uint32_t k = grid_.cell_begin(cell); k < grid_.cell_end(cell); ++k) visit_grid(k);
-        }
+    auto scan = [&](auto shapes_in_grid) {
+      for (std::int32_t z = lo[2]; z <= hi[2]; ++z)
+        for (std::int32_t y = lo[1]; y <= hi[1]; ++y)
+          for (std::int32_t x = lo[0]; x <= hi[0]; ++x) {
+            const std::uint32_t cell = grid_.cell_index(x, y, z);
+            for (std::uint32_t k = grid_.cell_begin(cell); k < grid_.cell_end(cell); ++k)
+              visit_grid(k, shapes_in_grid);
+          }
+    };
+    if (with_shapes_)
+      scan(std::true_type{});
+    else
+      scan(std::false_type{});
   }
   if (!i_cloth || !fluid || fluid->count() == 0) return;
 

@@ -26,7 +26,8 @@ namespace {
 std::shared_ptr<const MeshSdf> body_mesh_sdf(const RigidBodyDef& def, std::size_t index) {
   const rigid::BodySurface surface = rigid::body_surface(def);
   ClothMesh mesh;
-  for (const Vec3d& v : surface.vertices) mesh.positions.push_back({float(v.x), float(v.y), float(v.z)});
+  for (const Vec3d& v : surface.vertices)
+    mesh.positions.push_back({float(v.x), float(v.y), float(v.z)});
   mesh.triangles = surface.triangles;
   float extent = 0.0f;
   for (int a = 0; a < 3; ++a) {
@@ -36,7 +37,8 @@ std::shared_ptr<const MeshSdf> body_mesh_sdf(const RigidBodyDef& def, std::size_
   }
   const float voxel = std::max(extent / 64.0f, 1e-6f);
   auto sdf = std::make_shared<MeshSdf>();
-  build_mesh_sdf(mesh, voxel, 4.0f * voxel, def.mesh.file, "rigid_bodies[" + std::to_string(index) + "].mesh", *sdf);
+  build_mesh_sdf(mesh, voxel, 4.0f * voxel, def.mesh.file,
+                 "rigid_bodies[" + std::to_string(index) + "].mesh", *sdf);
   return sdf;
 }
 
@@ -47,12 +49,16 @@ SolidSurface body_solid(const rigid::ShapeDims& d, const MeshSdf* sdf) {
     case rigid::BodyShape::Box:
       s.shape = ColliderDef::Shape::Box, s.a = -0.5 * d.size, s.b = 0.5 * d.size;
       break;
-    case rigid::BodyShape::Sphere: s.shape = ColliderDef::Shape::Sphere, s.radius = d.radius; break;
+    case rigid::BodyShape::Sphere:
+      s.shape = ColliderDef::Shape::Sphere, s.radius = d.radius;
+      break;
     case rigid::BodyShape::Capsule:
       s.shape = ColliderDef::Shape::Capsule, s.radius = d.radius;
       s.a = {0.0, -0.5 * d.length, 0.0}, s.b = {0.0, 0.5 * d.length, 0.0};
       break;
-    case rigid::BodyShape::Mesh: s.shape = ColliderDef::Shape::Mesh, s.sdf = sdf; break;
+    case rigid::BodyShape::Mesh:
+      s.shape = ColliderDef::Shape::Mesh, s.sdf = sdf;
+      break;
   }
   return s;
 }
@@ -82,8 +88,8 @@ ParticleBodyContacts::ParticleBodyContacts(const SceneDef& scene, ParticleStore&
 void ParticleBodyContacts::add_passes(std::vector<Pass>& passes) {
   passes.push_back({"particle-body pairs", Stage::Neighbors, pass_order::kParticleBodyPairs, true,
                     [this](const StepContext&) { find_candidates(); }});
-  passes.push_back({"particle-body contacts", Stage::Iterate, pass_order::kParticleBodyContacts, true,
-                    [this](const StepContext&) { solve(); }});
+  passes.push_back({"particle-body contacts", Stage::Iterate, pass_order::kParticleBodyContacts,
+                    true, [this](const StepContext&) { solve(); }});
 }
 
 void ParticleBodyContacts::find_candidates() {
@@ -102,7 +108,8 @@ void ParticleBodyContacts::find_candidates() {
       // bounding ball is the test).
       rigid::SurfacePenetration pen;
       if (solid.surface.shape == ColliderDef::Shape::Mesh ||
-          rigid::penetration(solid.surface, rotate_back(bodies_[k].q, d), double(s.radius[i]) + margin, pen))
+          rigid::penetration(solid.surface, rotate_back(bodies_[k].q, d),
+                             double(s.radius[i]) + margin, pen))
         candidates_.push_back({std::uint32_t(i), std::uint32_t(k)});
     }
   }
@@ -119,7 +126,8 @@ void ParticleBodyContacts::solve() {
     const double bound = solids_[c.body].extent + radius;  // the ball that holds the solid's reach
     if (!(dot(from_centre, from_centre) < bound * bound)) continue;
     rigid::SurfacePenetration pen;
-    if (!rigid::penetration(solids_[c.body].surface, rotate_back(b.q, from_centre), radius, pen)) continue;
+    if (!rigid::penetration(solids_[c.body].surface, rotate_back(b.q, from_centre), radius, pen))
+      continue;
     const double depth = pen.depth;
     const Vec3d n = rotate(b.q, pen.normal);
     const Vec3d lever = p - (radius - depth) * n - b.x;
@@ -138,7 +146,8 @@ void ParticleBodyContacts::solve() {
     if (mu > 0.0) {
       const Vec3d local = rotate_back(b.q, lever);
       const Vec3d body_motion = b.world_point(local) - (b.x_prev + rotate(b.q_prev, local));
-      const Vec3d particle_motion = p + moved - Vec3d{double(s.x[i]), double(s.y[i]), double(s.z[i])};
+      const Vec3d particle_motion =
+          p + moved - Vec3d{double(s.x[i]), double(s.y[i]), double(s.z[i])};
       const Vec3d slip = particle_motion - body_motion;
       const Vec3d slip_t = slip - dot(slip, n) * n;
       const double slip_length = length(slip_t);

@@ -55,7 +55,8 @@ class ParticleBodyContacts final : public Family {
   static bool needed(const SceneDef& scene);
 
   /// `bodies`: the rigid family's bodies (scene order), moved by the contacts.
-  ParticleBodyContacts(const SceneDef& scene, ParticleStore& store, std::vector<rigid::RigidBody>& bodies);
+  ParticleBodyContacts(const SceneDef& scene, ParticleStore& store,
+                       std::vector<rigid::RigidBody>& bodies);
 
   void add_passes(std::vector<Pass>& passes) override;
 
@@ -76,10 +77,10 @@ class ParticleBodyContacts final : public Family {
   };
   ParticleStore& store_;
   std::vector<rigid::RigidBody>& bodies_;
-  std::vector<Solid> solids_;                                 // per body
-  std::vector<std::shared_ptr<const MeshSdf>> mesh_sdfs_;     // the mesh bodies' fields
-  std::vector<double> body_friction_;                         // per body: static mu
-  std::vector<double> cloth_friction_;                        // per cloth
+  std::vector<Solid> solids_;                              // per body
+  std::vector<std::shared_ptr<const MeshSdf>> mesh_sdfs_;  // the mesh bodies' fields
+  std::vector<double> body_friction_;                      // per body: static mu
+  std::vector<double> cloth_friction_;                     // per cloth
   std::vector<Candidate> candidates_;
 };
 
