@@ -5,7 +5,8 @@
 // sags over a table edge where a one-cluster beam does not, about as much at any iteration count
 // with stiffness_per_substep; spheres and voxelized meshes have their lattice's particles;
 // plastic region bodies keep their bits across thread counts and checkpoints (with their plastic
-// chunk); bad bodies are refused naming the field.
+// chunk); bad bodies are refused naming the field. Shapes in the particle contacts: a box resting
+// on another, a box held by a hammock of cloth, threads and checkpoints.
 #include <gtest/gtest.h>
 
 #include <algorithm>
