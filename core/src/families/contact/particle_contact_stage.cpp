@@ -233,10 +233,12 @@ void ParticleContactStage::find_shape_partner_boxes(const ParticleStore& store) 
       if (!(a.lo[k] <= b.hi[k] && b.lo[k] <= a.hi[k])) return false;  // apart (or empty, or NaN)
     return true;
   };
-  partner_boxes_.assign(shape_count_, {});
-  for (std::size_t c = 0; c < shape_count_; ++c)
+  partner_boxes_.resize(shape_count_);
+  for (std::size_t c = 0; c < shape_count_; ++c) {
+    partner_boxes_[c].clear();
     for (std::size_t k = 0; k < boxes_.size(); ++k)
       if (k != c && meet(boxes_[c], boxes_[k])) partner_boxes_[c].push_back(std::uint32_t(k));
+  }
 }
 
 // Whether shape particle i lies in the grown box of another shape or of the cloth: a particle
@@ -253,6 +255,7 @@ bool ParticleContactStage::near_a_partner(const ParticleStore& store, std::size_
 }
 
 void ParticleContactStage::solve(const kernels::ParticleView& p) {
+  if (contacts_.size() == 0) return;  // nothing within reach this substep
   kernels::solve_particle_contacts(p, contacts_, friction_, scratch_);
 }
 
