@@ -5,7 +5,8 @@
 // sags over a table edge where a one-cluster beam does not, about as much at any iteration count
 // with stiffness_per_substep; spheres and voxelized meshes have their lattice's particles;
 // plastic region bodies keep their bits across thread counts and checkpoints (with their plastic
-// chunk); bad bodies are refused naming the field.
+// chunk); bad bodies are refused naming the field. Shapes in the particle contacts: a box resting
+// on another, a box held by a hammock of cloth, threads and checkpoints.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -19,6 +20,7 @@
 #include "seiche/checkpoint.hpp"
 #include "seiche/kernels/shape_matching.hpp"
 #include "seiche/output_files.hpp"
+#include "seiche/phase.hpp"
 #include "seiche/scene_loader.hpp"
 #include "seiche/simulation.hpp"
 #include "seiche/state_hash.hpp"
@@ -501,4 +503,120 @@ TEST(ShapeMatching, BadBodiesAreRefusedNamingTheField) {
   EXPECT_EQ(message("{" + box + R"(, "cluster_half_width": -1})").rfind("shapes[0].cluster_half_width", 0), 0u);
   EXPECT_EQ(message("{" + box + R"(, "creep": -1})").rfind("shapes[0].creep", 0), 0u);
   EXPECT_EQ(message("{" + box + R"(, "max_plastic_strain": 0})").rfind("shapes[0].max_plastic_strain", 0), 0u);
+}
+
+// ---- Shapes in the particle contact stage (particle_contact_stage.hpp) --------------------------
+
+namespace {
+
+// The smallest distance between a particle of shape `a` and one of shape `b` (or of a cloth when
+// b is -1), on the store's positions.
+double closest_between(const ParticleStore& s, std::uint32_t a, int b) {
+  double closest = INFINITY;
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    if (phase_material(s.phase[i]) != Material::Shape || (s.phase[i] >> 8) != a) continue;
+    for (std::size_t j = 0; j < s.size(); ++j) {
+      const bool partner = b < 0 ? phase_material(s.phase[j]) == Material::Cloth
+                                 : phase_material(s.phase[j]) == Material::Shape && (s.phase[j] >> 8) == std::uint32_t(b);
+      if (!partner) continue;
+      closest = std::min(closest, std::hypot(double(s.x[i] - s.x[j]), double(s.y[i] - s.y[j]), double(s.z[i] - s.z[j])));
+    }
+  }
+  return closest;
+}
+
+double lowest_of_shape(const ParticleStore& s, std::uint32_t shape) {
+  double lowest = INFINITY;
+  for (std::size_t i = 0; i < s.size(); ++i)
+    if (phase_material(s.phase[i]) == Material::Shape && (s.phase[i] >> 8) == shape) lowest = std::min(lowest, double(s.y[i]));
+  return lowest;
+}
+
+// Two rigid 0.2 m boxes (spacing 0.05: contact distance 0.05 between them), the upper one dropped
+// from 0.1 m above the lower one, which stands on the floor, moved by half a spacing along x and z:
+// each of its particles comes to sit in a hollow between four of the lower box's (no friction
+// between shapes without cloth, so a box on the tops of the other's particles would slide off).
+constexpr const char* kStackedShapes = R"({
+  "solver": {"substeps": 16, "iterations": 8},
+  "domain": {"min": [0, 0, 0], "max": [1, 1, 1], "friction": 0.6},
+  "shapes": [{"box": {"min": [0.4, 0.025, 0.4], "max": [0.6, 0.225, 0.6]}, "spacing": 0.05, "density": 500},
+             {"box": {"min": [0.425, 0.35, 0.425], "max": [0.625, 0.55, 0.625]}, "spacing": 0.05, "density": 500}]
+})";
+
+}  // namespace
+
+// After every frame, no particle of one box is closer to one of the other than their contact
+// distance less a fifth of it; at the end the upper box rests on the lower one, still, its lowest
+// layer nested in the lower's top: sqrt(1/2) spacing above it (its particles a spacing from the
+// four below, half a spacing off along x and z).
+TEST(ShapeContacts, ShapeBoxRestsOnAnotherShapeBox) {
+  const SceneDef scene = load_scene_text(kStackedShapes, "stacked.json");
+  Simulation sim(scene);
+  for (int f = 1; f <= 60; ++f) {
+    ASSERT_EQ(sim.step_frame().non_finite, 0u);
+    EXPECT_GT(closest_between(sim.particles(), 0, 1), 0.8 * kSpacing) << "frame " << f;
+  }
+  const ParticleStore& s = sim.particles();
+  double highest_lower = -INFINITY;
+  for (std::size_t i = 0; i < s.size(); ++i)
+    if ((s.phase[i] >> 8) == 0) highest_lower = std::max(highest_lower, double(s.y[i]));
+  EXPECT_NEAR(lowest_of_shape(s, 1) - highest_lower, std::sqrt(0.5) * kSpacing, 0.1 * kSpacing);
+  for (std::size_t i = 0; i < s.size(); ++i) EXPECT_LT(std::hypot(s.vx[i], s.vy[i], s.vz[i]), 0.05f);
+}
+
+// A rigid box dropped into a hammock (a sheet pinned at its four corners, 0.5 m above the floor):
+// the cloth holds it: no box particle comes nearer to a cloth vertex than their contact distance
+// (half the spacing plus half the thickness) less a fifth of it, and after 2 s (damped: an
+// inextensible sheet is a trampoline) the box lies in the sheet, 0.4 m above the floor, at rest.
+TEST(ShapeContacts, ShapeDroppedOnAClothIsHeldByIt) {
+  const SceneDef scene = load_scene_text(R"({
+    "solver": {"substeps": 16, "iterations": 8, "damping": 2},
+    "domain": {"min": [0, 0, 0], "max": [1, 1, 1]},
+    "shapes": [{"box": {"min": [0.45, 0.65, 0.45], "max": [0.55, 0.75, 0.55]}, "spacing": 0.05, "density": 200}],
+    "cloths": [{"name": "hammock", "sheet": {"origin": [0.2, 0.5, 0.2], "size": [0.6, 0.6], "resolution": [25, 25],
+                "plane": "xz"}, "mass_per_area": 0.5, "thickness": 0.02, "pins": [0, 24, 600, 624]}]
+  })",
+                                         "hammock.json");
+  Simulation sim(scene);
+  const double contact = 0.5 * kSpacing + 0.5 * 0.02;
+  for (int f = 1; f <= 120; ++f) {
+    ASSERT_EQ(sim.step_frame().non_finite, 0u);
+    EXPECT_GT(closest_between(sim.particles(), 0, -1), 0.8 * contact) << "frame " << f;
+  }
+  const ParticleStore& s = sim.particles();
+  EXPECT_GT(lowest_of_shape(s, 0), 0.4) << "the box fell through the cloth";
+  for (std::size_t i = 0; i < s.size(); ++i)
+    if (phase_material(s.phase[i]) == Material::Shape) {
+      EXPECT_LT(std::hypot(s.vx[i], s.vy[i], s.vz[i]), 0.1f);
+    }
+}
+
+// Shapes touching shapes and cloth: the same bits on 1, 2 and 3 threads, and a checkpoint (the
+// contacts add no state) continues bit for bit.
+TEST(ShapeContacts, SameBitsAtEveryThreadCountAndAcrossACheckpoint) {
+  const SceneDef scene = load_scene_text(kStackedShapes, "stacked.json");
+  auto hash = [&](int threads, int frames) {
+    return run_with_threads(threads, [&] {
+      Simulation sim(scene);
+      for (int f = 0; f < frames; ++f) sim.step_frame(FrameMeasure::Skip);
+      return state_hash(sim.particles());
+    });
+  };
+  const std::uint64_t one = hash(1, 30);
+  EXPECT_EQ(hash(2, 30), one);
+  EXPECT_EQ(hash(3, 30), one);
+
+  const fs::path dir = fs::temp_directory_path() / "seiche_clothbody_shape_checkpoint";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const fs::path file = dir / "checkpoint.bin";
+  Simulation straight(scene);
+  for (int f = 0; f < 15; ++f) straight.step_frame();
+  write_file_atomically(file, encode_checkpoint(straight, 15));
+  Simulation resumed(scene);
+  restore_checkpoint(resumed, read_checkpoint(file), 15, file);
+  for (int f = 0; f < 15; ++f) straight.step_frame(), resumed.step_frame();
+  EXPECT_EQ(state_hash(resumed.particles()), state_hash(straight.particles()));
+  EXPECT_EQ(state_hash(straight.particles()), one);
+  fs::remove_all(dir);
 }

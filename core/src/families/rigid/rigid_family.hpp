@@ -48,6 +48,8 @@ class RigidFamily final : public Family {
   void restore_state(const CheckpointChunks& chunks) override;
 
   const std::vector<rigid::RigidBody>& bodies() const { return bodies_; }
+  /// The bodies, for the passes of other families that move them (particle_body_contacts.hpp).
+  std::vector<rigid::RigidBody>& bodies() { return bodies_; }
   const rigid::JointSolver& joints() const { return joints_; }
   /// Every body's position, orientation and velocities now, in scene order.
   std::vector<BodyPose> poses() const;

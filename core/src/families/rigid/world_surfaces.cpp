@@ -65,8 +65,7 @@ WorldSurfaces::WorldSurfaces(const SceneDef& scene, std::span<const std::shared_
   }
 }
 
-bool WorldSurfaces::penetration(int surface, Vec3d p, double r, SurfacePenetration& out) const {
-  const Surface& s = surfaces_[std::size_t(surface)];
+bool penetration(const SolidSurface& s, Vec3d p, double r, SurfacePenetration& out) {
   switch (s.shape) {
     case ColliderDef::Shape::Plane: {
       const double depth = r - dot(p - s.a, s.b);

@@ -11,7 +11,9 @@
 //   mesh:  d = r - sdf(p), n = grad sdf; outside the field's box, from its nearest point c:
 //          d = r - (sdf(c) + |p - c|), n = grad sdf(c)  (an upper bound of sdf(p), equal above a face)
 // A contact is d > 0. Each surface has its Coulomb friction (the domain's `friction` for the
-// walls, the collider's own).
+// walls, the collider's own). The same shapes, given in a rigid body's own frame, are the bodies'
+// solids for the particles' contacts with them (particle_body_contacts.hpp): one query,
+// penetration(), for both.
 #pragma once
 
 #include <memory>
@@ -29,6 +31,20 @@ struct SurfacePenetration {
   Vec3d normal;        ///< unit, out of the surface
 };
 
+/// One solid: a plane, box, sphere, capsule or mesh (its signed distance field), in whatever
+/// frame the ball's centre is given in.
+struct SolidSurface {
+  ColliderDef::Shape shape = ColliderDef::Shape::Plane;  ///< the domain's walls are planes
+  Vec3d a, b;            ///< plane: point, unit normal; box: min, max; sphere: centre; capsule: ends
+  double radius = 0.0;   ///< sphere, capsule
+  double friction = 0.0;
+  const MeshSdf* sdf = nullptr;  ///< mesh: its field (owned by the caller)
+};
+
+/// How deep the ball (p, r) reaches into `s` (the formulas above); false where it does not
+/// (depth <= 0).
+bool penetration(const SolidSurface& s, Vec3d p, double r, SurfacePenetration& out);
+
 class WorldSurfaces {
  public:
   WorldSurfaces() = default;
@@ -40,16 +56,12 @@ class WorldSurfaces {
   int count() const { return int(surfaces_.size()); }
   double friction(int surface) const { return surfaces_[std::size_t(surface)].friction; }
   /// How deep the ball (p, r) reaches into `surface`; false where it does not (depth <= 0).
-  bool penetration(int surface, Vec3d p, double r, SurfacePenetration& out) const;
+  bool penetration(int surface, Vec3d p, double r, SurfacePenetration& out) const {
+    return rigid::penetration(surfaces_[std::size_t(surface)], p, r, out);
+  }
 
  private:
-  struct Surface {
-    ColliderDef::Shape shape = ColliderDef::Shape::Plane;  // the domain's walls are planes
-    Vec3d a, b;              // plane: point, unit normal; box: min, max; sphere: centre; capsule: ends
-    double radius = 0.0;     // sphere, capsule
-    double friction = 0.0;
-    const MeshSdf* sdf = nullptr;
-  };
+  using Surface = SolidSurface;
   std::vector<Surface> surfaces_;
   std::vector<std::shared_ptr<const MeshSdf>> mesh_sdfs_;  // the mesh colliders' fields
 };
