@@ -7,6 +7,7 @@
 #include <string>
 
 #include "families/rigid/body_shape.hpp"
+#include "families/rigid/body_solid.hpp"
 #include "seiche/kernels/sph_kernels.hpp"
 
 namespace seiche::fluid_body {
@@ -16,7 +17,7 @@ namespace {
 double component(Vec3d v, int a) { return a == 0 ? v.x : a == 1 ? v.y : v.z; }
 
 // The lattice's cell centres inside the solid and within h of its surface.
-std::vector<Vec3d> boundary_sites(const rigid::ShapeDims& dims, const rigid::WorldSurfaces& solid, double extent,
+std::vector<Vec3d> boundary_sites(const rigid::ShapeDims& dims, const rigid::SolidSurface& solid, double extent,
                                   double spacing, double h) {
   Vec3d step{spacing, spacing, spacing}, start;
   int count[3];
@@ -36,7 +37,7 @@ std::vector<Vec3d> boundary_sites(const rigid::ShapeDims& dims, const rigid::Wor
       for (int i = 0; i < count[0]; ++i) {
         const Vec3d p{start.x + i * step.x, start.y + j * step.y, start.z + k * step.z};
         rigid::SurfacePenetration inside;
-        if (solid.penetration(0, p, 0.0, inside) && inside.depth < h) sites.push_back(p);
+        if (rigid::penetration(solid, p, 0.0, inside) && inside.depth < h) sites.push_back(p);
       }
   if (sites.empty()) sites.push_back({0.0, 0.0, 0.0});  // smaller than a cell
   return sites;
@@ -56,7 +57,8 @@ BodyBoundary sample_body_boundary(const RigidBodyDef& def, std::size_t index, do
   BodyBoundary b;
   const rigid::ShapeDims dims = rigid::body_shape_def(def);
   b.extent = rigid::mass_properties(dims).extent;
-  b.solid = rigid::WorldSurfaces::of_body_shape(def, "rigid_bodies[" + std::to_string(index) + "]");
+  if (dims.shape == rigid::BodyShape::Mesh) b.field = rigid::body_mesh_sdf(def, index);
+  b.solid = rigid::body_solid(dims, b.field.get());
   std::vector<Vec3d> sites = boundary_sites(dims, b.solid, b.extent, spacing, h);
 
   // The grid over the sites' box, cell h; sites counted into cells in site order.

@@ -18,6 +18,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -35,7 +36,8 @@ struct BodyBoundary {
   std::vector<double> psi;    ///< m^3, per site
   double reach = 0.0;         ///< max |site| + h: no fluid particle farther from the centre sees a site
   double extent = 0.0;        ///< the solid's farthest point from the centre (m)
-  rigid::WorldSurfaces solid; ///< the body's solid shape in its frame (surface 0)
+  rigid::SolidSurface solid;  ///< the body's solid in its frame (body_solid.hpp)
+  std::shared_ptr<const MeshSdf> field;  ///< a mesh body's field (the solid points into it)
 
   // The grid: cell (i, j, k) covers lo + [i, i+1) h ...; its sites are [cell_start[c], cell_start[c+1]).
   double h = 0.0;

@@ -121,7 +121,7 @@ void FluidBodyFamily::solve_density() {
   const kernels::PbfParams& prm = fluid_.solver().params();
   const kernels::SphKernel kernel(prm.h);
   const double mass = prm.mass;
-  std::vector<RigidBody>& bodies = rigid_.mutable_bodies();
+  std::vector<RigidBody>& bodies = rigid_.bodies();
   float* px = store_.px.data();
   float* py = store_.py.data();
   float* pz = store_.pz.data();
@@ -154,7 +154,7 @@ void FluidBodyFamily::solve_density() {
 
 void FluidBodyFamily::separate() {
   const double inverse_mass = 1.0 / double(fluid_.solver().particle_mass());
-  std::vector<RigidBody>& bodies = rigid_.mutable_bodies();
+  std::vector<RigidBody>& bodies = rigid_.bodies();
   float* px = store_.px.data();
   float* py = store_.py.data();
   float* pz = store_.pz.data();
@@ -167,7 +167,7 @@ void FluidBodyFamily::separate() {
       const Vec3d r = p - b.x;
       if (dot(r, r) >= reach * reach) continue;
       rigid::SurfacePenetration contact;
-      if (!boundaries_[k].solid.penetration(0, rotate_back(b.q, r), particle_radius_, contact)) continue;
+      if (!rigid::penetration(boundaries_[k].solid, rotate_back(b.q, r), particle_radius_, contact)) continue;
       const Vec3d n = rotate(b.q, contact.normal);
       const double denominator = inverse_mass + rigid::positional_inverse_mass(b, r, n);
       const double dlambda = contact.depth / denominator;  // denominator >= 1/m > 0

@@ -22,7 +22,7 @@
 //     on its body at x_b: the pair's momentum is kept exactly.
 //   "fluid-body separation" (after the joints and the body contacts): a fluid particle whose
 //     ball (radius s/2) reaches depth d into a body's solid along normal n (the solid's shape
-//     query, world_surfaces.hpp, in the body frame) is a contact:
+//     query of body_solid.hpp in the body frame) is a contact:
 //       dlambda = d / (1/m + w_body),  w_body = 1/M + (r x n)^T I^-1 (r x n),  r = p_i - x_body
 //       p_i += dlambda / m n,  the body gets the impulse -dlambda n at r
 // Fluid particles write only their own positions (in parallel); the impulses on a body add up

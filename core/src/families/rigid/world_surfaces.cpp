@@ -3,10 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
-
-#include "body_shape.hpp"
-#include "body_surface.hpp"
-#include "families/collider/collider_family.hpp"
+#include <stdexcept>
+#include <string>
 
 namespace seiche::rigid {
 
@@ -31,7 +29,13 @@ bool out_of_ball(Vec3d p, Vec3d c, double reach, SurfacePenetration& out) {
 
 }  // namespace
 
-WorldSurfaces::WorldSurfaces(const SceneDef& scene) {
+WorldSurfaces::WorldSurfaces(const SceneDef& scene, std::span<const std::shared_ptr<const MeshSdf>> mesh_fields) {
+  const auto is_mesh = [](const ColliderDef& c) { return c.shape == ColliderDef::Shape::Mesh; };
+  const auto mesh_colliders = std::size_t(std::count_if(scene.colliders.begin(), scene.colliders.end(), is_mesh));
+  const auto missing = [](const std::shared_ptr<const MeshSdf>& field) { return !field; };
+  if (mesh_fields.size() != mesh_colliders || std::any_of(mesh_fields.begin(), mesh_fields.end(), missing))
+    throw std::invalid_argument("WorldSurfaces: " + std::to_string(mesh_colliders) +
+                                " mesh colliders need as many fields");
   // The domain's walls: planes facing in, lower then upper, x then y then z.
   const Vec3d lo = to_d(scene.domain.min), hi = to_d(scene.domain.max);
   for (int a = 0; a < 3; ++a)
@@ -53,7 +57,7 @@ WorldSurfaces::WorldSurfaces(const SceneDef& scene) {
       case ColliderDef::Shape::Sphere: s.a = to_d(c.center), s.radius = c.radius; break;
       case ColliderDef::Shape::Capsule: s.a = to_d(c.end_a), s.b = to_d(c.end_b), s.radius = c.radius; break;
       case ColliderDef::Shape::Mesh:
-        mesh_sdfs_.push_back(build_collider_sdf(c, k));
+        mesh_sdfs_.push_back(mesh_fields[mesh_sdfs_.size()]);
         s.sdf = mesh_sdfs_.back().get();
         break;
     }
@@ -61,42 +65,7 @@ WorldSurfaces::WorldSurfaces(const SceneDef& scene) {
   }
 }
 
-WorldSurfaces WorldSurfaces::of_body_shape(const RigidBodyDef& def, const std::string& json_path) {
-  const ShapeDims dims = body_shape_def(def);
-  WorldSurfaces solid;
-  Surface s;
-  switch (dims.shape) {
-    case BodyShape::Box: s.shape = ColliderDef::Shape::Box, s.a = -0.5 * dims.size, s.b = 0.5 * dims.size; break;
-    case BodyShape::Sphere: s.shape = ColliderDef::Shape::Sphere, s.radius = dims.radius; break;
-    case BodyShape::Capsule:
-      s.shape = ColliderDef::Shape::Capsule, s.radius = dims.radius;
-      s.a = {0.0, -0.5 * dims.length, 0.0}, s.b = {0.0, 0.5 * dims.length, 0.0};
-      break;
-    case BodyShape::Mesh: {
-      const BodySurface surface = body_surface(def);
-      ClothMesh mesh;
-      for (const Vec3d& v : surface.vertices) mesh.positions.push_back({float(v.x), float(v.y), float(v.z)});
-      mesh.triangles = surface.triangles;
-      float extent = 0.0f;
-      for (int a = 0; a < 3; ++a) {
-        float lo = INFINITY, hi = -INFINITY;
-        for (const Vec3& x : mesh.positions) lo = std::min(lo, x[a]), hi = std::max(hi, x[a]);
-        extent = std::max(extent, hi - lo);
-      }
-      const float voxel = std::max(extent / 64.0f, 1e-6f);
-      auto sdf = std::make_shared<MeshSdf>();
-      build_mesh_sdf(mesh, voxel, 4.0f * voxel, def.mesh.file, json_path + ".mesh", *sdf);
-      s.shape = ColliderDef::Shape::Mesh, s.sdf = sdf.get();
-      solid.mesh_sdfs_.push_back(std::move(sdf));
-      break;
-    }
-  }
-  solid.surfaces_.push_back(s);
-  return solid;
-}
-
-bool WorldSurfaces::penetration(int surface, Vec3d p, double r, SurfacePenetration& out) const {
-  const Surface& s = surfaces_[std::size_t(surface)];
+bool penetration(const SolidSurface& s, Vec3d p, double r, SurfacePenetration& out) {
   switch (s.shape) {
     case ColliderDef::Shape::Plane: {
       const double depth = r - dot(p - s.a, s.b);
