@@ -9,7 +9,9 @@
 // every collider shape, threads and checkpoints. The tree solve of ball joints: the 1:1000 chain
 // (scenes/rigid_chain.json), a 100-link chain, a branching tree, a loop. Mesh bodies' mass
 // properties and per-frame OBJs. The machine-independent sin, cos and atan2 the bodies use,
-// against the C library's.
+// against the C library's. Cloth and shape particles against bodies, two-way: a sheet draped over
+// a box body, the momentum of a sheet thrown at a free ball, a shape on a mesh body, threads and
+// checkpoints (scenes/cloth_over_box.json).
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
@@ -23,6 +25,7 @@
 #include <string>
 #include <vector>
 
+#include "families/collider/collider_family.hpp"
 #include "families/rigid/body_mesh.hpp"
 #include "families/rigid/body_shape.hpp"
 #include "families/rigid/body_surface.hpp"
@@ -35,7 +38,9 @@
 #include "seiche/output_files.hpp"
 #include "seiche/scene_loader.hpp"
 #include "seiche/simulation.hpp"
+#include "seiche/state_hash.hpp"
 #include "seiche/thread_count.hpp"
+#include "test_temp_dir.hpp"
 
 using namespace seiche;
 using namespace seiche::rigid;
@@ -369,7 +374,7 @@ struct Resumed {
 };
 
 Resumed resume_from_checkpoint(const SceneDef& scene, const std::string& name, int at, int more) {
-  const fs::path dir = fs::temp_directory_path() / name;
+  const fs::path dir = testing_support::temp_path(name);
   fs::remove_all(dir);
   fs::create_directories(dir);
   const fs::path file = dir / "checkpoint.bin";
@@ -730,7 +735,7 @@ void expect_tensor_near(const Tensor& a, const Tensor& b, double tolerance) {
 
 // Writes the mesh as an OBJ under the temporary folder and returns its path.
 fs::path write_obj(const std::string& name, const std::vector<Vec3d>& v, const Triangles& t) {
-  const fs::path path = fs::temp_directory_path() / ("seiche_body_" + name + ".obj");
+  const fs::path path = testing_support::temp_path("seiche_body_" + name + ".obj");
   std::string text;
   for (const Vec3d& p : v) text += fmt::format("v {} {} {}\n", p.x, p.y, p.z);
   for (const auto& f : t) text += fmt::format("f {} {} {}\n", f[0] + 1, f[1] + 1, f[2] + 1);
@@ -1267,6 +1272,32 @@ TEST(Contacts, BallRestsOnEveryColliderShape) {
   for (const BodyPose& b : p) EXPECT_LT(std::hypot(b.velocity[0], b.velocity[1], b.velocity[2]), 1e-6);
 }
 
+// A mesh collider's signed distance field is built once, by the collider family, and the bodies'
+// contacts hold that same field (a second build would leave the collider family its only owner);
+// a rigid family given no field for a mesh collider is refused.
+TEST(Contacts, MeshCollidersFieldIsBuiltOnceAndShared) {
+  const SceneDef scene = load_scene_text(R"({
+    "domain": {"min": [-2, -1, -1], "max": [2, 2, 1]},
+    "colliders": [{"sphere": {"center": [-0.4, 0, 0], "radius": 0.3}},
+                  {"mesh": {"file": ")" + std::string(SEICHE_SCENES_DIR) + R"(/meshes/cube.obj", "scale": 0.5}},
+                  {"mesh": {"file": ")" + std::string(SEICHE_SCENES_DIR) + R"(/meshes/icosphere.obj", "scale": 0.2,
+                            "translate": [1, 0, 0]}}],
+    "rigid_bodies": [{"name": "ball", "shape": "sphere", "radius": 0.1, "position": [1, 0.55, 0]}]
+  })",
+                                         "shared_fields.json");
+  ParticleStore store;
+  const ColliderFamily colliders(scene, store);
+  ASSERT_EQ(colliders.mesh_fields().size(), 2u);
+  for (const auto& field : colliders.mesh_fields()) EXPECT_EQ(field.use_count(), 1);
+  {
+    const RigidFamily bodies(scene, colliders.mesh_fields());
+    for (const auto& field : colliders.mesh_fields()) EXPECT_EQ(field.use_count(), 2);
+  }
+  for (const auto& field : colliders.mesh_fields()) EXPECT_EQ(field.use_count(), 1);
+  EXPECT_THROW(RigidFamily{scene}, std::invalid_argument);
+  EXPECT_THROW(RigidFamily(scene, std::span(colliders.mesh_fields()).first(1)), std::invalid_argument);
+}
+
 // Boxes, a capsule and balls thrown tumbling into the domain's corner, with friction and
 // restitution: the same bits on 1, 2 and 3 threads (the contacts run serially, body by body, in
 // scene order).
@@ -1562,4 +1593,175 @@ TEST(JointTrees, RigidChainIsBitIdenticalOnOneTwoAndThreeThreads) {
   EXPECT_EQ(std::count(one.begin(), one.end(), '\n'), 20);
   EXPECT_EQ(bodies_after_frames(scene, 30, 2), one);
   EXPECT_EQ(bodies_after_frames(scene, 30, 3), one);
+}
+
+// ---- Cloth and shape particles against bodies (particle_body_contacts.hpp) ---------------------
+
+namespace {
+
+// Where a particle's ball (centre p, radius r) reaches into a box body of `size` at `pose`: the
+// depth inside the box grown by r (<= 0 outside).
+double depth_in_box(const BodyPose& pose, Vec3d size, Vec3d p, double r) {
+  const Quatd q{pose.orientation[0], pose.orientation[1], pose.orientation[2], pose.orientation[3]};
+  const Vec3d local = rotate_back(q, p - Vec3d{pose.position[0], pose.position[1], pose.position[2]});
+  return std::min({0.5 * size.x + r - std::fabs(local.x), 0.5 * size.y + r - std::fabs(local.y),
+                   0.5 * size.z + r - std::fabs(local.z)});
+}
+
+// A 0.4 m box body resting on the floor, a 0.8 m sheet (radius 5 mm) dropped on it from 0.2 m
+// above its top.
+constexpr const char* kClothOnBox = R"({
+  "solver": {"substeps": 10, "iterations": 2},
+  "domain": {"min": [-1, 0, -1], "max": [1, 2, 1], "friction": 0.5},
+  "rigid_bodies": [{"name": "box", "size": [0.4, 0.4, 0.4], "density": 300, "position": [0, 0.2, 0]}],
+  "cloths": [{"name": "sheet", "sheet": {"origin": [-0.4, 0.6, -0.4], "size": [0.8, 0.8], "resolution": [24, 24],
+              "plane": "xz"}, "mass_per_area": 0.5, "thickness": 0.01, "friction": 0.4}]
+})";
+
+}  // namespace
+
+// After every frame, no cloth vertex is inside the box body by more than 1 mm (a fifth of its
+// radius); at the end the sheet lies on the box's top (its vertices above the top there) and
+// hangs over its sides (vertices below the top), and the box, pushed down by the cloth's weight,
+// stands where it stood.
+TEST(ParticleBodyContacts, ClothDrapesOverABoxBodyOnTheFloor) {
+  const SceneDef scene = load_scene_text(kClothOnBox, "cloth_on_box.json");
+  Simulation sim(scene);
+  const Vec3d size{0.4, 0.4, 0.4};
+  double deepest = -1.0;
+  for (int f = 1; f <= 60; ++f) {
+    ASSERT_EQ(sim.step_frame().non_finite, 0u) << "frame " << f;
+    const ParticleStore& s = sim.particles();
+    const BodyPose box = sim.body_poses()[0];
+    for (std::size_t i = 0; i < s.size(); ++i) {
+      const double depth = depth_in_box(box, size, {s.x[i], s.y[i], s.z[i]}, s.radius[i]);
+      deepest = std::max(deepest, depth);
+      ASSERT_LT(depth, 1e-3) << "frame " << f << ", vertex id " << s.id[i];
+    }
+  }
+  const ParticleStore& s = sim.particles();
+  int on_top = 0, hanging = 0;
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    if (std::fabs(s.x[i]) < 0.15 && std::fabs(s.z[i]) < 0.15) {
+      ++on_top;
+      EXPECT_GT(s.y[i], 0.4) << "a vertex over the top went through it";
+      EXPECT_LT(s.y[i], 0.42) << "a vertex over the top does not lie on it";
+    }
+    if (s.y[i] < 0.35) ++hanging;
+  }
+  EXPECT_GT(on_top, 50);
+  EXPECT_GT(hanging, 100);
+  const BodyPose box = sim.body_poses()[0];
+  EXPECT_NEAR(box.position[0], 0.0, 1e-3);
+  EXPECT_NEAR(box.position[1], 0.2, 1e-3);
+  EXPECT_NEAR(box.position[2], 0.0, 1e-3);
+}
+
+// In zero gravity, a sheet thrown at a free ball: the contacts are internal forces, so the total
+// linear momentum (the cloth's sum of m v and the ball's M v) stays what the cloth brought, to
+// float rounding; the ball is pushed along, and the cloth slowed.
+TEST(ParticleBodyContacts, ClothThrownAtAFreeBodyConservesLinearMomentum) {
+  const SceneDef scene = load_scene_text(R"({
+    "solver": {"gravity": [0, 0, 0]},
+    "domain": {"min": [-3, -3, -3], "max": [3, 3, 3]},
+    "rigid_bodies": [{"name": "ball", "shape": "sphere", "radius": 0.15, "density": 200, "position": [0.05, 0.02, 0],
+                      "friction": 0.5}],
+    "cloths": [{"name": "sheet", "sheet": {"origin": [-0.25, -0.25, -0.5], "size": [0.5, 0.5], "resolution": [16, 16],
+                "plane": "xy"}, "mass_per_area": 2, "thickness": 0.01, "velocity": [0, 0, 2]}]
+  })",
+                                         "throw.json");
+  const double ball_mass = mass_properties(body_shape_def(scene.rigid_bodies[0])).mass;
+  Simulation sim(scene);
+  auto momentum = [&] {
+    const ParticleStore& s = sim.particles();
+    Vec3d cloth;
+    for (std::size_t i = 0; i < s.size(); ++i) cloth += (1.0 / double(s.w[i])) * Vec3d{s.vx[i], s.vy[i], s.vz[i]};
+    const BodyPose b = sim.body_poses()[0];
+    return std::pair{cloth, ball_mass * Vec3d{b.velocity[0], b.velocity[1], b.velocity[2]}};
+  };
+  const auto [cloth0, ball0] = momentum();
+  const Vec3d total0 = cloth0 + ball0;
+  ASSERT_GT(total0.z, 0.5);
+  for (int f = 1; f <= 30; ++f) {
+    ASSERT_EQ(sim.step_frame().non_finite, 0u);
+    const auto [cloth, ball] = momentum();
+    EXPECT_LT(length(cloth + ball - total0), 1e-4 * length(total0)) << "frame " << f;
+  }
+  const auto [cloth, ball] = momentum();
+  EXPECT_GT(ball.z, 0.2 * total0.z) << "the ball should be pushed along";
+  EXPECT_LT(cloth.z, 0.8 * total0.z) << "the cloth should be slowed";
+  EXPECT_GT(sim.body_poses()[0].position[2], 0.05);
+}
+
+namespace {
+
+SceneDef cloth_over_box_scene() { return load_scene_file(std::string(SEICHE_SCENES_DIR) + "/cloth_over_box.json"); }
+
+// The particles' hash and the bodies' file after `frames` frames on `threads` threads.
+std::pair<std::uint64_t, std::string> coupled_state(const SceneDef& scene, int frames, int threads) {
+  return run_with_threads(threads, [&] {
+    Simulation sim(scene);
+    for (int f = 0; f < frames; ++f) sim.step_frame(FrameMeasure::Skip);
+    return std::pair{state_hash(sim.particles()), encode_bodies_jsonl(scene, sim.body_poses())};
+  });
+}
+
+}  // namespace
+
+// The shipped scene (a sheet falling on a box and a ball): the contacts run serially in a fixed
+// order, so 1, 2 and 3 threads give the same bits, the particles' and the bodies'.
+TEST(ParticleBodyContacts, ClothOverBoxIsBitIdenticalOnOneTwoAndThreeThreads) {
+  const SceneDef scene = cloth_over_box_scene();
+  const auto one = coupled_state(scene, 40, 1);
+  EXPECT_EQ(coupled_state(scene, 40, 2), one);
+  EXPECT_EQ(coupled_state(scene, 40, 3), one);
+  // The cloth reached the bodies by then: they were pushed (their poses moved off the scene's).
+  Simulation still(scene);
+  EXPECT_NE(one.second, encode_bodies_jsonl(scene, still.body_poses()));
+}
+
+// The contacts carry nothing across substeps: a resume from a checkpoint taken while the sheet
+// lies on the bodies continues bit for bit (bodies and particles).
+TEST(ParticleBodyContacts, CheckpointContinuesBitForBit) {
+  const SceneDef scene = cloth_over_box_scene();
+  const Resumed r = resume_from_checkpoint(scene, "seiche_clothbody_checkpoint", 30, 10);
+  EXPECT_EQ(r.resumed, r.straight);
+}
+
+// A scene with bodies and no cloth or shapes builds no particle-body pass; with cloth, it does.
+TEST(ParticleBodyContacts, OnlyScenesWithBodiesAndClothOrShapesHaveThePasses) {
+  auto has_pass = [](const SceneDef& scene) {
+    const std::vector<std::string> passes = Simulation(scene).pipeline();
+    return std::find(passes.begin(), passes.end(), "particle-body contacts") != passes.end();
+  };
+  EXPECT_FALSE(has_pass(pendulums_scene()));
+  EXPECT_TRUE(has_pass(cloth_over_box_scene()));
+  EXPECT_FALSE(has_pass(load_scene_file(std::string(SEICHE_SCENES_DIR) + "/cloth_drape.json")));
+}
+
+// A rigid shape-matched box (0.1 m, spacing 0.025: radius 12.5 mm) dropped on a mesh body (the
+// 0.3 m cube of scenes/meshes, its field's voxel 4.7 mm) standing on the floor: after every frame
+// no particle's ball reaches into the cube by more than 2 mm, and at the end the box lies on the
+// cube's top (its lowest particles a radius above it, within 2 mm), the cube where it stood.
+TEST(ParticleBodyContacts, ShapeRestsOnAMeshBody) {
+  const std::string cube = std::string(SEICHE_SCENES_DIR) + "/meshes/cube.obj";
+  const SceneDef scene = load_scene_text(fmt::format(R"({{
+    "solver": {{"substeps": 16, "iterations": 8}},
+    "domain": {{"min": [-1, 0, -1], "max": [1, 2, 1], "friction": 0.5}},
+    "rigid_bodies": [{{"name": "cube", "shape": "mesh", "mesh": {{"file": "{}", "scale": 0.3}}, "position": [0, 0.15, 0]}}],
+    "shapes": [{{"box": {{"min": [-0.04, 0.45, -0.06], "max": [0.06, 0.55, 0.04]}}, "spacing": 0.025, "density": 400}}]
+  }})", cube), "shape_on_mesh.json");
+  Simulation sim(scene);
+  const Vec3d size{0.3, 0.3, 0.3};
+  for (int f = 1; f <= 60; ++f) {
+    ASSERT_EQ(sim.step_frame().non_finite, 0u);
+    const ParticleStore& s = sim.particles();
+    for (std::size_t i = 0; i < s.size(); ++i)
+      ASSERT_LT(depth_in_box(sim.body_poses()[0], size, {s.x[i], s.y[i], s.z[i]}, s.radius[i]), 2e-3) << "frame " << f;
+  }
+  const ParticleStore& s = sim.particles();
+  double lowest = INFINITY;
+  for (std::size_t i = 0; i < s.size(); ++i) lowest = std::min(lowest, double(s.y[i]));
+  EXPECT_NEAR(lowest, 0.3 + 0.0125, 2e-3);
+  EXPECT_NEAR(sim.body_poses()[0].position[1], 0.15, 1e-3);
 }

@@ -14,6 +14,7 @@
 
 #include <fmt/format.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include "families/cloth/cloth_mesh.hpp"
 #include "loop/family_registry.hpp"
@@ -1199,7 +1200,9 @@ TEST(SceneFormatDoc, KeyTablesMatchTheReaders) {
   const std::string text = read_text(doc);
   const std::string regenerated = detail::regenerate_scene_format(text);
   if (regenerated != text) {
-    const fs::path out = fs::temp_directory_path() / "scene-format.md";
+    // Kept after the test (the reader copies it over the doc), named by the process: no other run
+    // writes it.
+    const fs::path out = fs::temp_directory_path() / ("scene-format." + std::to_string(::getpid()) + ".md");
     std::ofstream(out, std::ios::binary) << regenerated;
     FAIL() << doc << " differs from the key tables of the scene readers; the regenerated page is " << out
            << " (copy it over the doc after checking the difference)";

@@ -70,7 +70,8 @@ const KeyTable<RigidBodyDef>& rigid_body_keys() {
       K("fixed", &RigidBodyDef::fixed).doc("the body never moves (infinite mass): an anchor for joints"),
       K("friction", &RigidBodyDef::friction, Range::at_least(0))
           .doc("static Coulomb friction of its contacts with the domain's walls and the colliders: "
-               "sqrt(this x the surface's `friction`) is the coefficient"),
+               "sqrt(this x the surface's `friction`) is the coefficient; with cloth sqrt(this x the "
+               "cloth's `friction`), with shape particles this"),
       K("dynamic_friction", &RigidBodyDef::dynamic_friction, Range::at_least(0))
           .doc("sliding friction of those contacts, mixed with the surface's `friction` the same way"),
       K("restitution", &RigidBodyDef::restitution, Range::closed(0, 1))

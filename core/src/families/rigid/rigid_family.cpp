@@ -124,14 +124,14 @@ std::vector<Joint> make_joints(const SceneDef& scene, const std::vector<RigidBod
 
 }  // namespace
 
-RigidFamily::RigidFamily(const SceneDef& scene)
+RigidFamily::RigidFamily(const SceneDef& scene, std::span<const std::shared_ptr<const MeshSdf>> mesh_fields)
     : gravity_(to_d(scene.solver.gravity)),
       lowest_corner_(to_d(scene.domain.min)),
       h_(scene.solver.frame_dt / scene.solver.substeps) {
   std::vector<double> extent;
   bodies_ = make_bodies(scene, extent);
   joints_ = rigid::JointSolver(make_joints(scene, bodies_, extent), bodies_, scene.solver.joint_trees);
-  contacts_ = rigid::WorldContacts(scene, h_);
+  contacts_ = rigid::WorldContacts(scene, h_, mesh_fields);
   start_energy_ = energy();
 }
 

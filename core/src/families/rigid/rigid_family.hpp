@@ -22,6 +22,8 @@
 // gravitational energy, zero at the domain's lowest corner as for the particles).
 #pragma once
 
+#include <memory>
+#include <span>
 #include <vector>
 
 #include "joint.hpp"
@@ -35,7 +37,10 @@ namespace seiche {
 
 class RigidFamily final : public Family {
  public:
-  explicit RigidFamily(const SceneDef& scene);
+  /// `mesh_fields`: the fields of the scene's mesh colliders, built by the collider family
+  /// (ColliderFamily::mesh_fields()), shared by the bodies' contacts with them (none needed in a
+  /// scene without mesh colliders; std::invalid_argument when they do not match).
+  explicit RigidFamily(const SceneDef& scene, std::span<const std::shared_ptr<const MeshSdf>> mesh_fields = {});
 
   void add_passes(std::vector<Pass>& passes) override;
   void measure(FrameMetrics& m) override;
@@ -43,6 +48,8 @@ class RigidFamily final : public Family {
   void restore_state(const CheckpointChunks& chunks) override;
 
   const std::vector<rigid::RigidBody>& bodies() const { return bodies_; }
+  /// The bodies, for the passes of other families that move them (particle_body_contacts.hpp).
+  std::vector<rigid::RigidBody>& bodies() { return bodies_; }
   const rigid::JointSolver& joints() const { return joints_; }
   /// Every body's position, orientation and velocities now, in scene order.
   std::vector<BodyPose> poses() const;

@@ -3,8 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
-
-#include "families/collider/collider_family.hpp"
+#include <stdexcept>
+#include <string>
 
 namespace seiche::rigid {
 
@@ -29,7 +29,13 @@ bool out_of_ball(Vec3d p, Vec3d c, double reach, SurfacePenetration& out) {
 
 }  // namespace
 
-WorldSurfaces::WorldSurfaces(const SceneDef& scene) {
+WorldSurfaces::WorldSurfaces(const SceneDef& scene, std::span<const std::shared_ptr<const MeshSdf>> mesh_fields) {
+  const auto is_mesh = [](const ColliderDef& c) { return c.shape == ColliderDef::Shape::Mesh; };
+  const auto mesh_colliders = std::size_t(std::count_if(scene.colliders.begin(), scene.colliders.end(), is_mesh));
+  const auto missing = [](const std::shared_ptr<const MeshSdf>& field) { return !field; };
+  if (mesh_fields.size() != mesh_colliders || std::any_of(mesh_fields.begin(), mesh_fields.end(), missing))
+    throw std::invalid_argument("WorldSurfaces: " + std::to_string(mesh_colliders) +
+                                " mesh colliders need as many fields");
   // The domain's walls: planes facing in, lower then upper, x then y then z.
   const Vec3d lo = to_d(scene.domain.min), hi = to_d(scene.domain.max);
   for (int a = 0; a < 3; ++a)
@@ -51,7 +57,7 @@ WorldSurfaces::WorldSurfaces(const SceneDef& scene) {
       case ColliderDef::Shape::Sphere: s.a = to_d(c.center), s.radius = c.radius; break;
       case ColliderDef::Shape::Capsule: s.a = to_d(c.end_a), s.b = to_d(c.end_b), s.radius = c.radius; break;
       case ColliderDef::Shape::Mesh:
-        mesh_sdfs_.push_back(build_collider_sdf(c, k));
+        mesh_sdfs_.push_back(mesh_fields[mesh_sdfs_.size()]);
         s.sdf = mesh_sdfs_.back().get();
         break;
     }
@@ -59,8 +65,7 @@ WorldSurfaces::WorldSurfaces(const SceneDef& scene) {
   }
 }
 
-bool WorldSurfaces::penetration(int surface, Vec3d p, double r, SurfacePenetration& out) const {
-  const Surface& s = surfaces_[std::size_t(surface)];
+bool penetration(const SolidSurface& s, Vec3d p, double r, SurfacePenetration& out) {
   switch (s.shape) {
     case ColliderDef::Shape::Plane: {
       const double depth = r - dot(p - s.a, s.b);
