@@ -8,9 +8,9 @@
 //   bodies   position, orientation, velocity, angular velocity (state: checkpoint chunk
 //            "rigid.bodies"); mass and inertia (rebuilt from the scene on a resume)
 //   joints   their connector points and axes in the bodies' frames (from the scene); their
-//            multipliers and motor start angles live within a substep, so are not state, but
-//            for the tree solve's (joint_tree.hpp: its geometric stiffness reads the previous
-//            substep's; checkpoint chunk "rigid.joint_trees", present with a tree)
+//            multipliers and motors' start angles and positions live within a substep, so are
+//            not state, but for the tree solve's (joint_tree.hpp: its geometric stiffness reads the
+//            previous substep's; checkpoint chunk "rigid.joint_trees", present with a tree)
 // Passes: "body predict" (Predict, kBodyPredict) and "body update" (Update, kBodyUpdate);
 // with joints, a reset (BeginSubstep, kJointReset) and "joints" every iteration (kJoints);
 // contacts with the static world (world_contacts.hpp): "body contacts" every iteration
@@ -18,7 +18,7 @@
 // (kBodyContactVelocities: dynamic friction and restitution); their multipliers live within a
 // substep (reset in the predict pass), so are not state either.
 // Error rows: "joint_drift" (each joint's positional error, JointSolver::error, relative to its
-// length), "joint_angle_error" (radians; hinge, fixed and slider joints), "body_energy" (|E - E_0| / E_0, E the bodies' kinetic plus
+// length), "joint_angle_error" (radians; hinge, fixed, slider and universal joints), "body_energy" (|E - E_0| / E_0, E the bodies' kinetic plus
 // gravitational energy, zero at the domain's lowest corner as for the particles).
 // With a fluid, the fluid_body family (families/fluid_body/) couples the bodies and the fluid
 // both ways through bodies().
