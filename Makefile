@@ -72,7 +72,7 @@ install: build
 	cmake --install $(BUILD_DIR) --prefix $(PREFIX)
 
 # Every Google Benchmark target, medians of 5 repetitions; then the stability suite at full size.
-BENCHES := bench_neighbor bench_pbf bench_kernels bench_cloth_kernels bench_cloth bench_scene_load bench_export
+BENCHES := bench_neighbor bench_pbf bench_kernels bench_cloth_kernels bench_cloth bench_bodies bench_scene_load bench_export
 bench: build
 	@for b in $(BENCHES); do \
 	  if [ -x $(BUILD_DIR)/benchmarks/$$b ]; then \

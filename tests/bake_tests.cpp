@@ -22,6 +22,7 @@
 #include "seiche/runner.hpp"
 #include "seiche/scene_loader.hpp"
 #include "seiche/simulation.hpp"
+#include "test_temp_dir.hpp"
 
 using namespace seiche;
 namespace fs = std::filesystem;
@@ -62,7 +63,7 @@ BakeRecipe mixed_recipe(int first, int last, const std::vector<std::string>& ove
 }
 
 fs::path fresh_dir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("seiche_bake_tests_" + name);
+  const fs::path d = testing_support::temp_path("seiche_bake_tests_" + name);
   fs::remove_all(d);
   fs::create_directories(d);
   return d;

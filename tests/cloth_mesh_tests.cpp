@@ -22,6 +22,7 @@
 #include "families/collider/mesh_sdf.hpp"
 #include "seiche/scene_loader.hpp"
 #include "seiche/thread_count.hpp"
+#include "test_temp_dir.hpp"
 
 namespace seiche {
 namespace {
@@ -48,9 +49,9 @@ bool contains(const std::string& text, const std::string& part) {
   return text.find(part) != std::string::npos;
 }
 
-// Writes `text` to a file in the test's temporary folder and returns its path.
+// Writes `text` to a file in the test process's temporary folder and returns its path.
 fs::path temp_obj(const std::string& name, const std::string& text) {
-  const fs::path path = fs::path(testing::TempDir()) / ("seiche_cloth_mesh_" + name);
+  const fs::path path = testing_support::temp_path("seiche_cloth_mesh_" + name);
   std::ofstream(path, std::ios::binary) << text;
   return path;
 }

@@ -27,6 +27,7 @@
 #include "seiche/scene_loader.hpp"
 #include "seiche/simulation.hpp"
 #include "seiche/thread_count.hpp"
+#include "test_temp_dir.hpp"
 
 using namespace seiche;
 namespace fs = std::filesystem;
@@ -437,7 +438,7 @@ TEST(Cloth, ClothOnFluidIsBitIdenticalWithOneAndTwoThreadsAndTouchesTheWater) {
 // ---- Output -----------------------------------------------------------------------------------
 
 TEST(Cloth, RunWritesOneObjPerClothAndFrame) {
-  const fs::path dir = fs::temp_directory_path() / "seiche_cloth_tests_obj";
+  const fs::path dir = testing_support::temp_path("seiche_cloth_tests_obj");
   fs::remove_all(dir);
   SceneDef scene = load_scene_text(hanging_sheet(false), "sheet");
   RunOptions o;

@@ -26,6 +26,7 @@
 #include "seiche/scene_loader.hpp"
 #include "seiche/simulation.hpp"
 #include "seiche/vtk_particles.hpp"
+#include "test_temp_dir.hpp"
 
 using namespace seiche;
 namespace fs = std::filesystem;
@@ -35,7 +36,7 @@ namespace {
 fs::path scene_path(const char* name) { return fs::path(SEICHE_SCENES_DIR) / name; }
 
 fs::path fresh_dir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("seiche_core_tests_" + name);
+  const fs::path d = testing_support::temp_path("seiche_core_tests_" + name);
   fs::remove_all(d);
   return d;
 }

@@ -31,6 +31,7 @@
 #include "seiche/output_files.hpp"
 #include "seiche/scene_loader.hpp"
 #include "seiche/thread_count.hpp"
+#include "test_temp_dir.hpp"
 
 namespace {
 
@@ -716,7 +717,7 @@ seiche::ParticleStore shuffled_store(const FluidParticles& fluid, int raw_partic
 }
 
 std::filesystem::path fresh_dir(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / ("seiche_export_tests_" + name);
+  const auto dir = seiche::testing_support::temp_path("seiche_export_tests_" + name);
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;

@@ -417,6 +417,38 @@ TEST(Pbf, RaggedAndEmptyNeighborListsMatchScalarReference) {
   }
 }
 
+// A boundary (rigid bodies' boundary particles, per particle (g_b, rho_b)) joins the density and
+// the denominator's gradient in both passes alike; a particle with no fluid neighbor that the
+// boundary compresses gets a lambda from the boundary alone, -C / (|g_b|^2 + eps).
+TEST(Pbf, BoundaryDensityJoinsTheConstraintAsTheReferenceHasIt) {
+  const float s = 0.1f;
+  std::vector<Float4> pos = lattice(5, s, 0.1f * s, 11);  // at rest: lambda only from the boundary
+  pos.push_back({10.0f, 10.0f, 10.0f, 0.0f});             // alone
+  PbfParams prm = fluid_params(s);
+  prm.epsilon = float(0.3 * lattice_lambda_denominator(s, prm.h));
+  const std::size_t n = pos.size();
+  std::vector<Float4> boundary(n);
+  for (std::size_t i = 0; i < n; ++i)
+    boundary[i] = {0.5f * float(i % 3), -1.0f, 0.25f, i % 2 ? 1.5f * prm.rest_density : 0.0f};
+  prm.boundary = boundary.data();
+  BruteNeighbors nb(pos, prm.h);
+  expect_passes_match_reference(pos, prm, nb, 0.0f);
+  std::vector<float> rho(n), lambda(n);
+  pbf_density_lambda(pos.data(), nb.span(), n, prm, rho.data(), lambda.data());
+  const std::size_t alone = n - 1;  // odd: rho_b = 1.5 rho0 on top of m W(0)
+  ASSERT_EQ(alone % 2, 1u);
+  const double rho_alone = prm.mass * SphKernel(prm.h).poly6(0.0f) + 1.5 * prm.rest_density;
+  EXPECT_NEAR(rho[alone], rho_alone, 1e-4 * rho_alone);
+  const double g2 = 0.25 * double((alone % 3) * (alone % 3)) + 1.0 + 0.0625;
+  const double c = std::max(rho_alone / prm.rest_density - 1.0, 0.0);
+  ASSERT_GT(c, 0.5);
+  EXPECT_NEAR(lambda[alone], -c / (g2 + prm.epsilon), 1e-4 * c / (g2 + prm.epsilon));
+  prm.boundary = nullptr;  // without: the lattice at rest has no lambda anywhere
+  std::vector<float> lambda_free(n);
+  pbf_density_lambda(pos.data(), nb.span(), n, prm, rho.data(), lambda_free.data());
+  EXPECT_LT(lambda[1], lambda_free[1]);
+}
+
 TEST(Pbf, ArtificialPressurePushesOnlyPairsCloserThanTheRestSpacing) {
   // Two particles without density error (lambda 0): only s_corr moves them. At and beyond the
   // rest spacing it is exactly 0; closer, it pushes them apart, symmetrically; without a rest

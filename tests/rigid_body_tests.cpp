@@ -3,7 +3,8 @@
 // torque-free motion of an asymmetric box (precession, and the flip of a spin about the
 // intermediate axis) from the gyroscopic term; the bodies' file per frame. Joints: a physical
 // pendulum's period, a double pendulum's energy, a hinge's motor and limits; the shipped
-// pendulums at any thread count and across a checkpoint. Contacts with the static world: the
+// pendulums at any thread count and across a checkpoint; a universal joint's Cardan relation, a
+// slider's motor, the joints' colours and their parallel solve at any thread count. Contacts with the static world: the
 // friction ramp, a drop without jitter, the bounce height, a sliding ball that starts rolling,
 // every collider shape, threads and checkpoints. Contacts between bodies: the stack of 10 boxes,
 // spheres head on (momentum, restitution), a box sliding on a heavy one, balls and capsules at rest
@@ -11,7 +12,11 @@
 // The tree solve of ball joints: the 1:1000 chain
 // (scenes/rigid_chain.json), a 100-link chain, a branching tree, a loop. Mesh bodies' mass
 // properties and per-frame OBJs. The machine-independent sin, cos and atan2 the bodies use,
-// against the C library's.
+// against the C library's. Cloth and shape particles against bodies, two-way: a sheet draped over
+// a box body, the momentum of a sheet thrown at a free ball, a shape on a mesh body, threads and
+// checkpoints (scenes/cloth_over_box.json). Bodies in fluid, two-way: buoyancy (float at the
+// density ratio, sink when denser), no fluid inside a moving body, threads and checkpoints, a body
+// too large for the fluid's spacing refused.
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
@@ -25,8 +30,10 @@
 #include <string>
 #include <vector>
 
+#include "families/collider/collider_family.hpp"
 #include "families/rigid/body_mesh.hpp"
 #include "families/rigid/body_shape.hpp"
+#include "families/rigid/body_solid.hpp"
 #include "families/rigid/body_surface.hpp"
 #include "families/rigid/portable_trig.hpp"
 #include "families/rigid/rigid_body.hpp"
@@ -37,7 +44,9 @@
 #include "seiche/output_files.hpp"
 #include "seiche/scene_loader.hpp"
 #include "seiche/simulation.hpp"
+#include "seiche/state_hash.hpp"
 #include "seiche/thread_count.hpp"
+#include "test_temp_dir.hpp"
 
 using namespace seiche;
 using namespace seiche::rigid;
@@ -371,7 +380,7 @@ struct Resumed {
 };
 
 Resumed resume_from_checkpoint(const SceneDef& scene, const std::string& name, int at, int more) {
-  const fs::path dir = fs::temp_directory_path() / name;
+  const fs::path dir = testing_support::temp_path(name);
   fs::remove_all(dir);
   fs::create_directories(dir);
   const fs::path file = dir / "checkpoint.bin";
@@ -512,6 +521,169 @@ TEST(Joints, SliderMovesOnlyAlongItsAxisWithinItsTravel) {
   EXPECT_LT(lowest, -0.399) << "the cart should reach the end of its travel";
 }
 
+// ---- Universal joints, slider motors, colours ---------------------------------------------------
+
+namespace {
+
+// The world vector v of the start turned as the body has turned since the start.
+Vec3d turned_since_start(const BodyPose& now, const BodyPose& start, Vec3d v) {
+  const auto quaternion = [](const BodyPose& p) {
+    return Quatd{p.orientation[0], p.orientation[1], p.orientation[2], p.orientation[3]};
+  };
+  return rotate(quaternion(now) * conjugate(quaternion(start)), v);
+}
+
+// Two shafts on hinges to the world, meeting at the origin at a bend of `bend_degrees` in the
+// x-y plane, coupled there by a universal joint (shaft a's cross axis z, perpendicular to the
+// plane of the shafts; shaft b's perpendicular to it and to shaft b), shaft a driven at 90
+// degrees/s, without gravity.
+std::string cardan_scene(double bend_degrees) {
+  const double beta = bend_degrees * std::numbers::pi / 180.0, c = std::cos(beta), s = std::sin(beta);
+  return fmt::format(R"({{
+    "domain": {{"min": [-2, -2, -2], "max": [2, 2, 2]}},
+    "solver": {{"gravity": [0, 0, 0]}},
+    "rigid_bodies": [
+      {{"name": "shaft_a", "size": [0.5, 0.06, 0.06], "position": [-0.3, 0, 0]}},
+      {{"name": "shaft_b", "size": [0.5, 0.06, 0.06], "position": [{}, {}, 0], "axis": [0, 0, 1], "angle": {}}}],
+    "joints": [
+      {{"type": "hinge", "body_b": "shaft_a", "anchor": [-0.3, 0, 0], "axis": [1, 0, 0], "target_velocity": 90}},
+      {{"type": "hinge", "body_b": "shaft_b", "anchor": [{}, {}, 0], "axis": [{}, {}, 0]}},
+      {{"type": "universal", "body_a": "shaft_a", "body_b": "shaft_b", "anchor": [0, 0, 0],
+        "axis": [0, 0, 1], "axis_b": [{}, {}, 0]}}]
+  }})", 0.3 * c, 0.3 * s, bend_degrees, 0.3 * c, 0.3 * s, c, s, -s, c);
+}
+
+}  // namespace
+
+// The Cardan joint at a bend of 45 degrees, shaft a driven through a full turn (4 s at 90
+// degrees/s): shaft b follows the classic relation tan(phi_b) = tan(phi_a) cos(beta) within 0.001
+// degree (5e-6 measured; it runs up to 9.9 degrees ahead of and behind shaft a, twice a turn),
+// and the two cross axes stay perpendicular within 0.001 degree (2e-6 measured). Shaft b does
+// turn a full turn as well.
+TEST(Joints, UniversalJointFollowsTheCardanRelation) {
+  const double beta = std::numbers::pi / 4;
+  const SceneDef scene = load_scene_text(cardan_scene(45.0), "cardan.json");
+  Simulation sim(scene);
+  const std::vector<BodyPose> start = sim.body_poses();
+  const Vec3d cross_a{0, 0, 1}, cross_b{-std::sin(beta), std::cos(beta), 0};
+  double worst_relation = 0.0, worst_perpendicular = 0.0, widest_lead = 0.0, turned_b = 0.0, last_b = 0.0;
+  for (int f = 0; f < 240; ++f) {
+    sim.step_frame();
+    const std::vector<BodyPose> p = sim.body_poses();
+    const Vec3d a_now = turned_since_start(p[0], start[0], cross_a);
+    const Vec3d b_now = turned_since_start(p[1], start[1], cross_b);
+    const double phi_a = std::atan2(-a_now.y, a_now.z);  // about +x: z turns toward -y
+    const double phi_b = std::atan2(b_now.z, dot(b_now, cross_b));
+    const double expected_b = std::atan2(std::sin(phi_a) * std::cos(beta), std::cos(phi_a));
+    worst_relation = std::max(worst_relation, std::fabs(wrap_angle(phi_b - expected_b)));
+    widest_lead = std::max(widest_lead, std::fabs(wrap_angle(phi_b - phi_a)));
+    worst_perpendicular = std::max(worst_perpendicular, std::fabs(std::asin(std::clamp(dot(a_now, b_now), -1.0, 1.0))));
+    turned_b += wrap_angle(phi_b - last_b), last_b = phi_b;
+  }
+  const double degrees = 180.0 / std::numbers::pi;
+  EXPECT_LT(worst_relation * degrees, 1e-3);
+  EXPECT_LT(worst_perpendicular * degrees, 1e-3);
+  EXPECT_GT(widest_lead * degrees, 9.0) << "shaft b should run ahead of and behind shaft a";
+  EXPECT_NEAR(turned_b * degrees, 360.0, 1.0);
+}
+
+// A cart on a slider up an incline of 30 degrees (as above) driven by the slider's motor: at
+// 0.5 m/s up the axis it holds its velocity within 1 % against gravity from the second frame on
+// (to 1e-9 measured); driven to 0.25 m (a rigid drive) it reaches it within 0.1 mm in a second
+// and stays; with a compliance c it settles below it by c m g sin(30) (the drive a spring),
+// within 5 % (1e-7 measured).
+TEST(Joints, SliderMotorReachesItsTargetVelocityAndPosition) {
+  const auto scene_with = [](const char* motor) {
+    return load_scene_text(fmt::format(R"({{
+      "domain": {{"min": [-2, -2, -2], "max": [2, 2, 2]}},
+      "rigid_bodies": [{{"name": "cart", "size": [0.2, 0.1, 0.1], "position": [0, 0, 0], "axis": [0, 0, 1], "angle": 30}}],
+      "joints": [{{"type": "slider", "body_b": "cart", "anchor": [0, 0, 0], "axis": [0.8660254, 0.5, 0], {}}}]
+    }})", motor), "slider_motor.json");
+  };
+  const double axis_x = std::cos(std::numbers::pi / 6), axis_y = 0.5;
+  const auto along = [&](const std::array<double, 3>& v) { return v[0] * axis_x + v[1] * axis_y; };
+  {
+    Simulation sim(scene_with(R"("target_velocity": 0.5)"));
+    for (int f = 0; f < 60; ++f) {
+      sim.step_frame();
+      if (f < 1) continue;
+      ASSERT_NEAR(along(sim.body_poses()[0].velocity), 0.5, 0.005) << "frame " << f + 1;
+    }
+    EXPECT_NEAR(along(sim.body_poses()[0].position), 0.5, 0.01);
+  }
+  {
+    Simulation sim(scene_with(R"("target_position": 0.25)"));
+    for (int f = 0; f < 60; ++f) sim.step_frame();
+    const double early = along(sim.body_poses()[0].position);
+    for (int f = 0; f < 60; ++f) sim.step_frame();
+    EXPECT_NEAR(early, 0.25, 1e-4);
+    EXPECT_NEAR(along(sim.body_poses()[0].position), 0.25, 1e-4);
+  }
+  {
+    const double compliance = 1e-4, mass = 0.2 * 0.1 * 0.1 * 1000.0;
+    Simulation sim(scene_with(R"("target_position": 0.25, "motor_compliance": 1e-4)"));
+    for (int f = 0; f < 600; ++f) sim.step_frame();
+    const double sag = compliance * mass * 9.81 * 0.5;
+    EXPECT_NEAR(0.25 - along(sim.body_poses()[0].position), sag, 0.05 * sag);
+  }
+}
+
+// The colours: joint k's colour is one more than the highest colour of an earlier joint it
+// shares a movable body with; the world and fixed bodies (-1 here) are shared freely.
+TEST(Joints, ColoursKeepTheSceneOrderOfJointsThatShareABody) {
+  // A chain 0-1-2-3 listed as (1-2), (0-1), (2-3); two pendulums on the world; one joint
+  // between bodies 4 and 5 after them.
+  const std::vector<JointEnds> ends{{0, 1, 2}, {1, 0, 1}, {2, 2, 3}, {3, -1, 4}, {4, -1, 5}, {5, 4, 5}};
+  const JointColours colours(ends, 6);
+  ASSERT_EQ(colours.colour_count(), 2u);
+  const auto members = [&](std::size_t c) {
+    const std::span<const std::size_t> s = colours.colour(c);
+    return std::vector<std::size_t>(s.begin(), s.end());
+  };
+  EXPECT_EQ(members(0), (std::vector<std::size_t>{0, 3, 4}));
+  EXPECT_EQ(members(1), (std::vector<std::size_t>{1, 2, 5}));
+  // A chain in order is a colour per link.
+  const std::vector<JointEnds> chain{{0, -1, 0}, {1, 0, 1}, {2, 1, 2}};
+  EXPECT_EQ(JointColours(chain, 3).colour_count(), 3u);
+}
+
+namespace {
+
+// `count` arms on hinges to the world, each with a motor or limits, plus a chain of three hinged
+// arms whose joints are listed from the free end up (a colour each): one colour of more than JointSolver::kParallelColour
+// joints (solved in parallel) and three more.
+SceneDef hinged_arms_scene(int count) {
+  std::string bodies, joints;
+  for (int k = 0; k < count; ++k) {
+    const double z = -1.5 + 3.0 * k / count;
+    bodies += fmt::format(R"({{"name": "arm_{}", "size": [0.3, 0.02, 0.02], "position": [0.15, 0, {}]}},)", k, z);
+    joints += fmt::format(R"({{"type": "hinge", "body_b": "arm_{}", "anchor": [0, 0, {}], "axis": [0, 0, 1], {}}},)", k, z,
+                          k % 2 ? R"("limits": [-30, 30])" : R"("target_velocity": 45, "motor_compliance": 1e-3)");
+  }
+  return load_scene_text(fmt::format(R"({{
+    "domain": {{"min": [-2, -2, -2], "max": [2, 2, 2]}},
+    "rigid_bodies": [{} {{"name": "c0", "size": [0.3, 0.02, 0.02], "position": [-0.15, 0.5, 0]}},
+                     {{"name": "c1", "size": [0.3, 0.02, 0.02], "position": [-0.45, 0.5, 0]}},
+                     {{"name": "c2", "size": [0.3, 0.02, 0.02], "position": [-0.75, 0.5, 0]}}],
+    "joints": [{} {{"type": "hinge", "body_a": "c1", "body_b": "c2", "anchor": [-0.6, 0.5, 0], "axis": [0, 0, 1]}},
+               {{"type": "hinge", "body_a": "c0", "body_b": "c1", "anchor": [-0.3, 0.5, 0], "axis": [0, 0, 1]}},
+               {{"type": "hinge", "body_b": "c0", "anchor": [0, 0.5, 0], "axis": [0, 0, 1]}}]
+  }})", bodies, joints), "arms.json");
+}
+
+}  // namespace
+
+// A colour of 300 joints is solved in parallel: the same bits on 1, 2 and 3 threads.
+TEST(Joints, ParallelColoursAreBitIdenticalOnOneTwoAndThreeThreads) {
+  const SceneDef scene = hinged_arms_scene(300);
+  const RigidFamily family(scene);
+  ASSERT_EQ(family.joints().colours().colour_count(), 3u);
+  ASSERT_GT(family.joints().colours().colour(0).size(), JointSolver::kParallelColour);
+  const std::string one = bodies_after_frames(scene, 10, 1);
+  EXPECT_EQ(bodies_after_frames(scene, 10, 2), one);
+  EXPECT_EQ(bodies_after_frames(scene, 10, 3), one);
+}
+
 // ---- Mesh bodies: mass properties from a closed triangle mesh ------------------------------------
 
 namespace {
@@ -569,7 +741,7 @@ void expect_tensor_near(const Tensor& a, const Tensor& b, double tolerance) {
 
 // Writes the mesh as an OBJ under the temporary folder and returns its path.
 fs::path write_obj(const std::string& name, const std::vector<Vec3d>& v, const Triangles& t) {
-  const fs::path path = fs::temp_directory_path() / ("seiche_body_" + name + ".obj");
+  const fs::path path = testing_support::temp_path("seiche_body_" + name + ".obj");
   std::string text;
   for (const Vec3d& p : v) text += fmt::format("v {} {} {}\n", p.x, p.y, p.z);
   for (const auto& f : t) text += fmt::format("f {} {} {}\n", f[0] + 1, f[1] + 1, f[2] + 1);
@@ -1106,6 +1278,32 @@ TEST(Contacts, BallRestsOnEveryColliderShape) {
   for (const BodyPose& b : p) EXPECT_LT(std::hypot(b.velocity[0], b.velocity[1], b.velocity[2]), 1e-6);
 }
 
+// A mesh collider's signed distance field is built once, by the collider family, and the bodies'
+// contacts hold that same field (a second build would leave the collider family its only owner);
+// a rigid family given no field for a mesh collider is refused.
+TEST(Contacts, MeshCollidersFieldIsBuiltOnceAndShared) {
+  const SceneDef scene = load_scene_text(R"({
+    "domain": {"min": [-2, -1, -1], "max": [2, 2, 1]},
+    "colliders": [{"sphere": {"center": [-0.4, 0, 0], "radius": 0.3}},
+                  {"mesh": {"file": ")" + std::string(SEICHE_SCENES_DIR) + R"(/meshes/cube.obj", "scale": 0.5}},
+                  {"mesh": {"file": ")" + std::string(SEICHE_SCENES_DIR) + R"(/meshes/icosphere.obj", "scale": 0.2,
+                            "translate": [1, 0, 0]}}],
+    "rigid_bodies": [{"name": "ball", "shape": "sphere", "radius": 0.1, "position": [1, 0.55, 0]}]
+  })",
+                                         "shared_fields.json");
+  ParticleStore store;
+  const ColliderFamily colliders(scene, store);
+  ASSERT_EQ(colliders.mesh_fields().size(), 2u);
+  for (const auto& field : colliders.mesh_fields()) EXPECT_EQ(field.use_count(), 1);
+  {
+    const RigidFamily bodies(scene, colliders.mesh_fields());
+    for (const auto& field : colliders.mesh_fields()) EXPECT_EQ(field.use_count(), 2);
+  }
+  for (const auto& field : colliders.mesh_fields()) EXPECT_EQ(field.use_count(), 1);
+  EXPECT_THROW(RigidFamily{scene}, std::invalid_argument);
+  EXPECT_THROW(RigidFamily(scene, std::span(colliders.mesh_fields()).first(1)), std::invalid_argument);
+}
+
 // Boxes, a capsule and balls thrown tumbling into the domain's corner, with friction and
 // restitution: the same bits on 1, 2 and 3 threads (the contacts run serially, body by body, in
 // scene order).
@@ -1626,4 +1824,377 @@ TEST(JointTrees, RigidChainIsBitIdenticalOnOneTwoAndThreeThreads) {
   EXPECT_EQ(std::count(one.begin(), one.end(), '\n'), 20);
   EXPECT_EQ(bodies_after_frames(scene, 30, 2), one);
   EXPECT_EQ(bodies_after_frames(scene, 30, 3), one);
+}
+
+// ---- Cloth and shape particles against bodies (particle_body_contacts.hpp) ---------------------
+
+namespace {
+
+// Where a particle's ball (centre p, radius r) reaches into a box body of `size` at `pose`: the
+// depth inside the box grown by r (<= 0 outside).
+double depth_in_box(const BodyPose& pose, Vec3d size, Vec3d p, double r) {
+  const Quatd q{pose.orientation[0], pose.orientation[1], pose.orientation[2], pose.orientation[3]};
+  const Vec3d local = rotate_back(q, p - Vec3d{pose.position[0], pose.position[1], pose.position[2]});
+  return std::min({0.5 * size.x + r - std::fabs(local.x), 0.5 * size.y + r - std::fabs(local.y),
+                   0.5 * size.z + r - std::fabs(local.z)});
+}
+
+// A 0.4 m box body resting on the floor, a 0.8 m sheet (radius 5 mm) dropped on it from 0.2 m
+// above its top.
+constexpr const char* kClothOnBox = R"({
+  "solver": {"substeps": 10, "iterations": 2},
+  "domain": {"min": [-1, 0, -1], "max": [1, 2, 1], "friction": 0.5},
+  "rigid_bodies": [{"name": "box", "size": [0.4, 0.4, 0.4], "density": 300, "position": [0, 0.2, 0]}],
+  "cloths": [{"name": "sheet", "sheet": {"origin": [-0.4, 0.6, -0.4], "size": [0.8, 0.8], "resolution": [24, 24],
+              "plane": "xz"}, "mass_per_area": 0.5, "thickness": 0.01, "friction": 0.4}]
+})";
+
+}  // namespace
+
+// After every frame, no cloth vertex is inside the box body by more than 1 mm (a fifth of its
+// radius); at the end the sheet lies on the box's top (its vertices above the top there) and
+// hangs over its sides (vertices below the top), and the box, pushed down by the cloth's weight,
+// stands where it stood.
+TEST(ParticleBodyContacts, ClothDrapesOverABoxBodyOnTheFloor) {
+  const SceneDef scene = load_scene_text(kClothOnBox, "cloth_on_box.json");
+  Simulation sim(scene);
+  const Vec3d size{0.4, 0.4, 0.4};
+  double deepest = -1.0;
+  for (int f = 1; f <= 60; ++f) {
+    ASSERT_EQ(sim.step_frame().non_finite, 0u) << "frame " << f;
+    const ParticleStore& s = sim.particles();
+    const BodyPose box = sim.body_poses()[0];
+    for (std::size_t i = 0; i < s.size(); ++i) {
+      const double depth = depth_in_box(box, size, {s.x[i], s.y[i], s.z[i]}, s.radius[i]);
+      deepest = std::max(deepest, depth);
+      ASSERT_LT(depth, 1e-3) << "frame " << f << ", vertex id " << s.id[i];
+    }
+  }
+  const ParticleStore& s = sim.particles();
+  int on_top = 0, hanging = 0;
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    if (std::fabs(s.x[i]) < 0.15 && std::fabs(s.z[i]) < 0.15) {
+      ++on_top;
+      EXPECT_GT(s.y[i], 0.4) << "a vertex over the top went through it";
+      EXPECT_LT(s.y[i], 0.42) << "a vertex over the top does not lie on it";
+    }
+    if (s.y[i] < 0.35) ++hanging;
+  }
+  EXPECT_GT(on_top, 50);
+  EXPECT_GT(hanging, 100);
+  const BodyPose box = sim.body_poses()[0];
+  EXPECT_NEAR(box.position[0], 0.0, 1e-3);
+  EXPECT_NEAR(box.position[1], 0.2, 1e-3);
+  EXPECT_NEAR(box.position[2], 0.0, 1e-3);
+}
+
+// In zero gravity, a sheet thrown at a free ball: the contacts are internal forces, so the total
+// linear momentum (the cloth's sum of m v and the ball's M v) stays what the cloth brought, to
+// float rounding; the ball is pushed along, and the cloth slowed.
+TEST(ParticleBodyContacts, ClothThrownAtAFreeBodyConservesLinearMomentum) {
+  const SceneDef scene = load_scene_text(R"({
+    "solver": {"gravity": [0, 0, 0]},
+    "domain": {"min": [-3, -3, -3], "max": [3, 3, 3]},
+    "rigid_bodies": [{"name": "ball", "shape": "sphere", "radius": 0.15, "density": 200, "position": [0.05, 0.02, 0],
+                      "friction": 0.5}],
+    "cloths": [{"name": "sheet", "sheet": {"origin": [-0.25, -0.25, -0.5], "size": [0.5, 0.5], "resolution": [16, 16],
+                "plane": "xy"}, "mass_per_area": 2, "thickness": 0.01, "velocity": [0, 0, 2]}]
+  })",
+                                         "throw.json");
+  const double ball_mass = mass_properties(body_shape_def(scene.rigid_bodies[0])).mass;
+  Simulation sim(scene);
+  auto momentum = [&] {
+    const ParticleStore& s = sim.particles();
+    Vec3d cloth;
+    for (std::size_t i = 0; i < s.size(); ++i) cloth += (1.0 / double(s.w[i])) * Vec3d{s.vx[i], s.vy[i], s.vz[i]};
+    const BodyPose b = sim.body_poses()[0];
+    return std::pair{cloth, ball_mass * Vec3d{b.velocity[0], b.velocity[1], b.velocity[2]}};
+  };
+  const auto [cloth0, ball0] = momentum();
+  const Vec3d total0 = cloth0 + ball0;
+  ASSERT_GT(total0.z, 0.5);
+  for (int f = 1; f <= 30; ++f) {
+    ASSERT_EQ(sim.step_frame().non_finite, 0u);
+    const auto [cloth, ball] = momentum();
+    EXPECT_LT(length(cloth + ball - total0), 1e-4 * length(total0)) << "frame " << f;
+  }
+  const auto [cloth, ball] = momentum();
+  EXPECT_GT(ball.z, 0.2 * total0.z) << "the ball should be pushed along";
+  EXPECT_LT(cloth.z, 0.8 * total0.z) << "the cloth should be slowed";
+  EXPECT_GT(sim.body_poses()[0].position[2], 0.05);
+}
+
+namespace {
+
+SceneDef cloth_over_box_scene() { return load_scene_file(std::string(SEICHE_SCENES_DIR) + "/cloth_over_box.json"); }
+
+// The particles' hash and the bodies' file after `frames` frames on `threads` threads.
+std::pair<std::uint64_t, std::string> coupled_state(const SceneDef& scene, int frames, int threads) {
+  return run_with_threads(threads, [&] {
+    Simulation sim(scene);
+    for (int f = 0; f < frames; ++f) sim.step_frame(FrameMeasure::Skip);
+    return std::pair{state_hash(sim.particles()), encode_bodies_jsonl(scene, sim.body_poses())};
+  });
+}
+
+}  // namespace
+
+// The shipped scene (a sheet falling on a box and a ball): the contacts run serially in a fixed
+// order, so 1, 2 and 3 threads give the same bits, the particles' and the bodies'.
+TEST(ParticleBodyContacts, ClothOverBoxIsBitIdenticalOnOneTwoAndThreeThreads) {
+  const SceneDef scene = cloth_over_box_scene();
+  const auto one = coupled_state(scene, 40, 1);
+  EXPECT_EQ(coupled_state(scene, 40, 2), one);
+  EXPECT_EQ(coupled_state(scene, 40, 3), one);
+  // The cloth reached the bodies by then: they were pushed (their poses moved off the scene's).
+  Simulation still(scene);
+  EXPECT_NE(one.second, encode_bodies_jsonl(scene, still.body_poses()));
+}
+
+// The contacts carry nothing across substeps: a resume from a checkpoint taken while the sheet
+// lies on the bodies continues bit for bit (bodies and particles).
+TEST(ParticleBodyContacts, CheckpointContinuesBitForBit) {
+  const SceneDef scene = cloth_over_box_scene();
+  const Resumed r = resume_from_checkpoint(scene, "seiche_clothbody_checkpoint", 30, 10);
+  EXPECT_EQ(r.resumed, r.straight);
+}
+
+// A scene with bodies and no cloth or shapes builds no particle-body pass; with cloth, it does.
+TEST(ParticleBodyContacts, OnlyScenesWithBodiesAndClothOrShapesHaveThePasses) {
+  auto has_pass = [](const SceneDef& scene) {
+    const std::vector<std::string> passes = Simulation(scene).pipeline();
+    return std::find(passes.begin(), passes.end(), "particle-body contacts") != passes.end();
+  };
+  EXPECT_FALSE(has_pass(pendulums_scene()));
+  EXPECT_TRUE(has_pass(cloth_over_box_scene()));
+  EXPECT_FALSE(has_pass(load_scene_file(std::string(SEICHE_SCENES_DIR) + "/cloth_drape.json")));
+}
+
+// A rigid shape-matched box (0.1 m, spacing 0.025: radius 12.5 mm) dropped on a mesh body (the
+// 0.3 m cube of scenes/meshes, its field's voxel 4.7 mm) standing on the floor: after every frame
+// no particle's ball reaches into the cube by more than 2 mm, and at the end the box lies on the
+// cube's top (its lowest particles a radius above it, within 2 mm), the cube where it stood.
+TEST(ParticleBodyContacts, ShapeRestsOnAMeshBody) {
+  const std::string cube = std::string(SEICHE_SCENES_DIR) + "/meshes/cube.obj";
+  const SceneDef scene = load_scene_text(fmt::format(R"({{
+    "solver": {{"substeps": 16, "iterations": 8}},
+    "domain": {{"min": [-1, 0, -1], "max": [1, 2, 1], "friction": 0.5}},
+    "rigid_bodies": [{{"name": "cube", "shape": "mesh", "mesh": {{"file": "{}", "scale": 0.3}}, "position": [0, 0.15, 0]}}],
+    "shapes": [{{"box": {{"min": [-0.04, 0.45, -0.06], "max": [0.06, 0.55, 0.04]}}, "spacing": 0.025, "density": 400}}]
+  }})", cube), "shape_on_mesh.json");
+  Simulation sim(scene);
+  const Vec3d size{0.3, 0.3, 0.3};
+  for (int f = 1; f <= 60; ++f) {
+    ASSERT_EQ(sim.step_frame().non_finite, 0u);
+    const ParticleStore& s = sim.particles();
+    for (std::size_t i = 0; i < s.size(); ++i)
+      ASSERT_LT(depth_in_box(sim.body_poses()[0], size, {s.x[i], s.y[i], s.z[i]}, s.radius[i]), 2e-3) << "frame " << f;
+  }
+  const ParticleStore& s = sim.particles();
+  double lowest = INFINITY;
+  for (std::size_t i = 0; i < s.size(); ++i) lowest = std::min(lowest, double(s.y[i]));
+  EXPECT_NEAR(lowest, 0.3 + 0.0125, 2e-3);
+  EXPECT_NEAR(sim.body_poses()[0].position[1], 0.15, 1e-3);
+}
+
+// ---- Bodies in fluid (families/fluid_body/) ----------------------------------------------------
+
+namespace {
+
+// A pool 0.5 x 0.5 m at spacing 0.02 m, its water let go as a column 0.25 x 0.5 x 0.5 m that
+// breaks into it (a settled lattice is jammed: it bears a body in shear), and a flat box
+// 0.25 x 0.125 x 0.25 m (upright at every density: its width is twice its height) of density
+// `density` dropped in from above. 4 iterations: at the default 2 the fluid's compression
+// lifts the 900 box to 0.855.
+SceneDef pool_with_box(double density) {
+  return load_scene_text(fmt::format(R"({{
+  "solver": {{"iterations": 4}},
+  "domain": {{"min": [0, 0, 0], "max": [0.5, 0.8, 0.5]}},
+  "fluids": [{{"box": {{"min": [0, 0, 0], "max": [0.25, 0.5, 0.5]}}, "spacing": 0.02}}],
+  "rigid_bodies": [{{"name": "box", "size": [0.25, 0.125, 0.25], "density": {}, "position": [0.25, 0.65, 0.25]}}]
+}})", density), "pool.json");
+}
+
+// The depth of water (m) above height `bottom` that presses on it: the fluid's mass above it per
+// area (each particle a layer of one spacing about its centre), over the pool away from the body
+// (farther than `keep_out` from its centre along x or z), in metres of water at rest density:
+// the pressure there is rest_density g times it (Archimedes' depth), however closely the
+// surface's particles pack.
+double water_depth_above(const Simulation& sim, double bottom, double spacing, double keep_out, double rest_density) {
+  const ParticleStore& s = sim.particles();
+  const BodyPose body = sim.body_poses()[0];
+  double mass = 0.0;
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    const double dx = s.x[i] - body.position[0], dz = s.z[i] - body.position[2];
+    if (std::max(std::fabs(dx), std::fabs(dz)) < keep_out) continue;
+    mass += std::clamp((s.y[i] + 0.5 * spacing - bottom) / spacing, 0.0, 1.0) / s.w[i];
+  }
+  // The pool's area less the kept-out square's part inside it.
+  const Vec3 lo = sim.scene().domain.min, hi = sim.scene().domain.max;
+  const auto overlap = [&](double c, int a) {
+    return std::max(0.0, std::min(c + keep_out, double(hi[a])) - std::max(c - keep_out, double(lo[a])));
+  };
+  const double area = double(hi[0] - lo[0]) * double(hi[2] - lo[2]) -
+                      overlap(body.position[0], 0) * overlap(body.position[2], 2);
+  return mass / (rest_density * area);
+}
+
+// The lowest point of box `size` at `pose`.
+double box_bottom(const BodyPose& pose, Vec3d size) {
+  const Quatd q{pose.orientation[0], pose.orientation[1], pose.orientation[2], pose.orientation[3]};
+  double bottom = INFINITY;
+  for (int c = 0; c < 8; ++c) {
+    const Vec3d corner{(c & 1 ? 0.5 : -0.5) * size.x, (c & 2 ? 0.5 : -0.5) * size.y, (c & 4 ? 0.5 : -0.5) * size.z};
+    bottom = std::min(bottom, pose.position[1] + rotate(q, corner).y);
+  }
+  return bottom;
+}
+
+// The box's submerged fraction (Archimedes' depth over its height, at most 1) averaged over the
+// last second of `frames`, and its bottom's height at the end.
+struct Floating {
+  double fraction = 0.0, bottom = 0.0;
+};
+Floating settle(double density, int frames) {
+  constexpr int kAveraged = 60;
+  Simulation sim(pool_with_box(density));
+  const Vec3d size{0.25, 0.125, 0.25};
+  Floating f;
+  for (int k = 0; k < frames; ++k) {
+    sim.step_frame(FrameMeasure::Skip);
+    if (k < frames - kAveraged) continue;
+    f.bottom = box_bottom(sim.body_poses()[0], size);
+    f.fraction += std::min(water_depth_above(sim, f.bottom, 0.02, 0.2, 1000.0) / size.y, 1.0) / kAveraged;
+  }
+  return f;
+}
+
+}  // namespace
+
+// Archimedes: a body of density rho_b floats with rho_b / rho_water of its height under water,
+// and a denser one sinks. Measured: 500 -> 0.48, 900 -> 0.88 (over the last second of 4.5 s);
+// 1100 and 2000 on the floor after 2 s (their bottoms 0.041 and 0.020 m up: a film of fluid of a
+// spacing or two that the body presses but does not squeeze out). At spacing 0.025 (the box 5
+// spacings high) the 900 box floats at 0.844: the discretization's share grows as s / height.
+TEST(FluidBody, BoxesFloatAtTheirDensityRatioAndDenserOnesSink) {
+  const Floating light = settle(500.0, 270);
+  EXPECT_NEAR(light.fraction, 0.5, 0.05);
+  const Floating heavy = settle(900.0, 270);
+  EXPECT_NEAR(heavy.fraction, 0.9, 0.05);
+  for (double density : {1100.0, 2000.0}) EXPECT_LT(settle(density, 120).bottom, 0.05) << density;
+}
+
+namespace {
+
+// A pool 0.6 x 0.2 x 0.3 m at spacing 0.02 m; a heavy box (density 3000) and a sphere (1500)
+// shot through it sideways, a capsule falling in turning.
+SceneDef bodies_through_pool() {
+  return load_scene_text(R"({
+  "domain": {"min": [0, 0, 0], "max": [0.6, 0.5, 0.3]},
+  "fluids": [{"box": {"min": [0, 0, 0], "max": [0.6, 0.2, 0.3]}, "spacing": 0.02}],
+  "rigid_bodies": [
+    {"name": "box", "size": [0.1, 0.1, 0.1], "density": 3000, "position": [0.08, 0.12, 0.15], "velocity": [3, 0, 0]},
+    {"name": "ball", "shape": "sphere", "radius": 0.05, "density": 1500, "position": [0.5, 0.3, 0.15], "velocity": [-2, -1, 0]},
+    {"name": "rod", "shape": "capsule", "radius": 0.03, "length": 0.1, "density": 800, "position": [0.3, 0.4, 0.15],
+     "angular_velocity": [0, 0, 8]}
+  ]
+})", "through.json");
+}
+
+// How deep the deepest fluid particle lies inside a body's solid (0: none inside).
+double deepest_fluid_inside(const Simulation& sim) {
+  std::vector<SolidSurface> solids;
+  std::vector<std::shared_ptr<const MeshSdf>> fields;
+  for (std::size_t k = 0; k < sim.scene().rigid_bodies.size(); ++k) {
+    const RigidBodyDef& def = sim.scene().rigid_bodies[k];
+    const ShapeDims dims = body_shape_def(def);
+    fields.push_back(dims.shape == BodyShape::Mesh ? body_mesh_sdf(def, k) : nullptr);
+    solids.push_back(body_solid(dims, fields.back().get()));
+  }
+  const std::vector<BodyPose> poses = sim.body_poses();
+  const ParticleStore& s = sim.particles();
+  double deepest = 0.0;
+  for (std::size_t i = 0; i < s.size(); ++i)
+    for (std::size_t k = 0; k < poses.size(); ++k) {
+      const BodyPose& b = poses[k];
+      const Quatd q{b.orientation[0], b.orientation[1], b.orientation[2], b.orientation[3]};
+      const Vec3d p = rotate_back(q, Vec3d{s.x[i], s.y[i], s.z[i]} - Vec3d{b.position[0], b.position[1], b.position[2]});
+      SurfacePenetration inside;
+      if (penetration(solids[k], p, 0.0, inside)) deepest = std::max(deepest, inside.depth);
+    }
+  return deepest;
+}
+
+}  // namespace
+
+// No fluid leaks through a moving body wall: after every frame no fluid particle is inside a
+// body, while the bodies cross the pool (the box at 3 m/s) and displace it.
+TEST(FluidBody, NoFluidParticleEndsInsideAMovingBody) {
+  Simulation sim(bodies_through_pool());
+  const double start_x = sim.body_poses()[0].position[0];
+  for (int f = 0; f < 40; ++f) {
+    sim.step_frame(FrameMeasure::Skip);
+    ASSERT_EQ(deepest_fluid_inside(sim), 0.0) << "frame " << f + 1;
+  }
+  EXPECT_GT(sim.body_poses()[0].position[0] - start_x, 0.15);  // the box went through the water
+}
+
+// The coupling's sums run in a fixed order: the bodies and the particles are bit-identical on
+// one, two and three threads, and a resumed bake continues bit for bit (the coupling keeps no
+// state of its own: the boundary is rebuilt from the scene).
+TEST(FluidBody, BitIdenticalOnAnyThreadCountAndAcrossACheckpoint) {
+  const SceneDef scene = bodies_through_pool();
+  const auto run = [&](int threads) {
+    return run_with_threads(threads, [&] {
+      Simulation sim(scene);
+      for (int f = 0; f < 12; ++f) sim.step_frame(FrameMeasure::Skip);
+      const ParticleStore& s = sim.particles();
+      std::vector<float> xs;
+      for (std::size_t i = 0; i < s.size(); ++i) xs.insert(xs.end(), {s.x[i], s.y[i], s.z[i]});
+      return std::make_pair(encode_bodies_jsonl(scene, sim.body_poses()), xs);
+    });
+  };
+  const auto one = run(1);
+  EXPECT_EQ(run(2), one);
+  EXPECT_EQ(run(3), one);
+  const Resumed r = resume_from_checkpoint(scene, "seiche_fluidbody_checkpoint", 6, 6);
+  EXPECT_EQ(r.resumed, r.straight);
+}
+
+// A body far too large for the fluid's spacing is refused when the scene is loaded (exit 2,
+// naming the body), not sampled into boundary particles for minutes; the same body without a
+// fluid, or a sphere mesh's size that fits, loads. A mesh body in fluid keeps the fluid out too.
+TEST(FluidBody, BodyTooLargeForTheFluidsSpacingIsRefusedAndAMeshBodyKeepsFluidOut) {
+  const auto scene = [](const std::string& fluid, const std::string& body) {
+    return fmt::format(R"({{"domain": {{"min": [0, 0, 0], "max": [400, 400, 400]}}{},
+      "rigid_bodies": [{}]}})", fluid, body);
+  };
+  const std::string fluid = R"(, "fluids": [{"box": {"min": [0, 0, 0], "max": [0.1, 0.1, 0.1]}, "spacing": 0.01}])";
+  const std::string huge = R"({"name": "huge", "shape": "sphere", "radius": 150, "position": [200, 200, 200]})";
+  try {
+    load_scene_text(scene(fluid, huge), "huge.json");
+    ADD_FAILURE() << "accepted";
+  } catch (const SceneError& e) {
+    EXPECT_EQ(e.json_path(), "rigid_bodies[0]");
+    EXPECT_EQ(e.file(), "huge.json");
+    EXPECT_NE(e.problem().find("too large for the fluid's spacing 0.01 m"), std::string::npos) << e.what();
+  }
+  EXPECT_NO_THROW(load_scene_text(scene("", huge), "huge.json"));
+
+  // A closed box mesh (0.1 m) pushed sideways through a small pool: no particle inside it.
+  std::vector<Vec3d> box;
+  Triangles outward;
+  box_mesh({0, 0, 0}, {0.1, 0.1, 0.1}, box, outward);
+  const fs::path obj = write_obj("fluidbody_box", box, outward);
+  SceneDef pool = load_scene_text(fmt::format(R"({{"domain": {{"min": [0, 0, 0], "max": [0.4, 0.3, 0.2]}},
+    "fluids": [{{"box": {{"min": [0, 0, 0], "max": [0.4, 0.12, 0.2]}}, "spacing": 0.02}}],
+    "rigid_bodies": [{{"name": "mesh", "shape": "mesh", "mesh": {{"file": "{}"}}, "density": 3000,
+                       "position": [0.08, 0.08, 0.1], "velocity": [2, 0, 0]}}]}})", obj.generic_string()), "mesh.json");
+  Simulation sim(pool);
+  for (int f = 0; f < 20; ++f) {
+    sim.step_frame(FrameMeasure::Skip);
+    ASSERT_EQ(deepest_fluid_inside(sim), 0.0) << "frame " << f + 1;
+  }
+  EXPECT_GT(sim.body_poses()[0].position[0], 0.15);
+  fs::remove(obj);
 }

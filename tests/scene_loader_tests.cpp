@@ -14,6 +14,7 @@
 
 #include <fmt/format.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include "families/cloth/cloth_mesh.hpp"
 #include "loop/family_registry.hpp"
@@ -837,6 +838,39 @@ const BadCase kBadCases[] = {
     {"BallAnchorB",
      R"({"rigid_bodies": [{"name": "a", "position": [0.5, 0.5, 0.5]}], "joints": [{"body_b": "a", "anchor": [0.5, 0.5, 0.5], "anchor_b": [0.5, 0.4, 0.5]}]})",
      "joints[0].anchor_b", "only a distance joint has"},
+    {"UniversalAxesNotPerpendicular",
+     R"({"rigid_bodies": [{"name": "a", "position": [0.5, 0.5, 0.5]}, {"name": "b", "position": [0.5, 0.2, 0.5]}], "joints": [{"type": "universal", "body_a": "a", "body_b": "b", "anchor": [0.5, 0.35, 0.5], "axis": [0, 0, 1], "axis_b": [0, 0.1, 1]}]})",
+     "joints[0].axis_b", "is at 5.711 degrees to axis [0, 0, 1]: a universal joint's axes must be perpendicular"},
+    {"UniversalAxisBMissing",
+     R"({"rigid_bodies": [{"name": "a", "position": [0.5, 0.5, 0.5]}, {"name": "b", "position": [0.5, 0.2, 0.5]}], "joints": [{"type": "universal", "body_a": "a", "body_b": "b", "anchor": [0.5, 0.35, 0.5], "axis": [0, 0, 1]}]})",
+     "joints[0].axis_b", "required key is missing"},
+    {"UniversalAxisBZero",
+     R"({"rigid_bodies": [{"name": "a", "position": [0.5, 0.5, 0.5]}, {"name": "b", "position": [0.5, 0.2, 0.5]}], "joints": [{"type": "universal", "body_a": "a", "body_b": "b", "anchor": [0.5, 0.35, 0.5], "axis": [0, 0, 1], "axis_b": [0, 0, 0]}]})",
+     "joints[0].axis_b", "a universal joint's axis_b must not be zero"},
+    {"UniversalAxisZero",
+     R"({"rigid_bodies": [{"name": "a", "position": [0.5, 0.5, 0.5]}, {"name": "b", "position": [0.5, 0.2, 0.5]}], "joints": [{"type": "universal", "body_a": "a", "body_b": "b", "anchor": [0.5, 0.35, 0.5], "axis": [0, 0, 0], "axis_b": [1, 0, 0]}]})",
+     "joints[0].axis", "a universal's axis must not be zero"},
+    {"HingeAxisB",
+     R"({"rigid_bodies": [{"name": "a", "position": [0.5, 0.5, 0.5]}], "joints": [{"type": "hinge", "body_b": "a", "anchor": [0.5, 0.9, 0.5], "axis_b": [1, 0, 0]}]})",
+     "joints[0].axis_b", "a hinge joint has no \"axis_b\" (only a universal joint has)"},
+    {"MotorWithoutTarget",
+     R"({"rigid_bodies": [{"name": "a", "position": [0.5, 0.5, 0.5]}], "joints": [{"type": "hinge", "body_b": "a", "anchor": [0.5, 0.9, 0.5], "motor_compliance": 1e-3}]})",
+     "joints[0].motor_compliance", "a motor without a target: give the hinge a target_angle or a target_velocity"},
+    {"SliderMotorWithoutTarget",
+     R"({"rigid_bodies": [{"name": "a", "position": [0.5, 0.5, 0.5]}], "joints": [{"type": "slider", "body_b": "a", "anchor": [0.5, 0.5, 0.5], "axis": [1, 0, 0], "motor_compliance": 1e-3}]})",
+     "joints[0].motor_compliance", "give the slider a target_position or a target_velocity"},
+    {"SliderTwoMotorTargets",
+     R"({"rigid_bodies": [{"name": "a", "position": [0.5, 0.5, 0.5]}], "joints": [{"type": "slider", "body_b": "a", "anchor": [0.5, 0.5, 0.5], "axis": [1, 0, 0], "target_position": 0.1, "target_velocity": 1}]})",
+     "joints[0].target_velocity", "a target position or at a target velocity, not both"},
+    {"SliderTargetAngle",
+     R"({"rigid_bodies": [{"name": "a", "position": [0.5, 0.5, 0.5]}], "joints": [{"type": "slider", "body_b": "a", "anchor": [0.5, 0.5, 0.5], "axis": [1, 0, 0], "target_angle": 10}]})",
+     "joints[0].target_angle", "a slider joint has no \"target_angle\" (only a hinge has)"},
+    {"HingeTargetPosition",
+     R"({"rigid_bodies": [{"name": "a", "position": [0.5, 0.5, 0.5]}], "joints": [{"type": "hinge", "body_b": "a", "anchor": [0.5, 0.9, 0.5], "target_position": 0.1}]})",
+     "joints[0].target_position", "only a slider has"},
+    {"BallTargetVelocity",
+     R"({"rigid_bodies": [{"name": "a", "position": [0.5, 0.5, 0.5]}], "joints": [{"body_b": "a", "anchor": [0.5, 0.9, 0.5], "target_velocity": 1}]})",
+     "joints[0].target_velocity", "(only a hinge or a slider has)"},
     {"JointComplianceNegative",
      R"({"rigid_bodies": [{"name": "a", "position": [0.5, 0.5, 0.5]}], "joints": [{"body_b": "a", "anchor": [0.5, 0.9, 0.5], "compliance": -1}]})",
      "joints[0].compliance", "must be >= 0"},
@@ -1166,7 +1200,9 @@ TEST(SceneFormatDoc, KeyTablesMatchTheReaders) {
   const std::string text = read_text(doc);
   const std::string regenerated = detail::regenerate_scene_format(text);
   if (regenerated != text) {
-    const fs::path out = fs::temp_directory_path() / "scene-format.md";
+    // Kept after the test (the reader copies it over the doc), named by the process: no other run
+    // writes it.
+    const fs::path out = fs::temp_directory_path() / ("scene-format." + std::to_string(::getpid()) + ".md");
     std::ofstream(out, std::ios::binary) << regenerated;
     FAIL() << doc << " differs from the key tables of the scene readers; the regenerated page is " << out
            << " (copy it over the doc after checking the difference)";

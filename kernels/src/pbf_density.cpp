@@ -216,6 +216,11 @@ void pbf_density_lambda(const Float4* pos, NeighborSpan nbr, std::size_t n, cons
         rho += Floats(prm.rest_density) * wall.fraction;
         sx += wall.gx, sy += wall.gy, sz += wall.gz;
       }
+      if (prm.boundary != nullptr) {
+        const Gathered4 b = group.own(prm.boundary);
+        rho += b.w;
+        sx += b.x, sy += b.y, sz += b.z;
+      }
       const Floats C = xsimd::max(rho / Floats(prm.rest_density) - Floats(1.0f), Floats(0.0f));
       const Floats denom = sx * sx + sy * sy + sz * sz +
                            Floats(grad_scale * grad_scale) * g2 + Floats(prm.epsilon);
@@ -314,6 +319,11 @@ void pbf_density_lambda_reference(const Float4* pos, NeighborSpan nbr, std::size
       const WallSum<float> wall = domain_walls(prm, pos[i]);
       rho += double(prm.rest_density) * wall.fraction;
       sx += wall.gx, sy += wall.gy, sz += wall.gz;
+    }
+    if (prm.boundary != nullptr) {
+      const Float4 b = prm.boundary[i];
+      rho += double(b.w);
+      sx += b.x, sy += b.y, sz += b.z;
     }
     const double C = std::max(rho / prm.rest_density - 1.0, 0.0);
     const double denom = sx * sx + sy * sy + sz * sz + V * V * g2 + prm.epsilon;

@@ -129,12 +129,13 @@ struct RigidBodyDef {
 /// compliance, from connector points; core/src/families/rigid/joint.hpp). Anchors and axis are
 /// given in the world frame at the start; each body keeps them in its own frame.
 struct JointDef {
-  std::string type = "ball";          ///< "ball", "hinge", "fixed", "distance" or "slider"
+  std::string type = "ball";          ///< "ball", "hinge", "fixed", "distance", "slider" or "universal"
   std::string body_a = "world";       ///< a body's name or "world"
   std::string body_b;                 ///< required: a body's name
   Vec3 anchor{0.0f, 0.0f, 0.0f};      ///< m, required: the connector point (of body_a for distance)
   Vec3 anchor_b{0.0f, 0.0f, 0.0f};    ///< distance: body_b's point (m), when has_anchor_b; else anchor
-  Vec3 axis{0.0f, 0.0f, 1.0f};        ///< hinge, slider: the axis, world frame at the start (not zero)
+  Vec3 axis{0.0f, 0.0f, 1.0f};        ///< hinge, slider, universal (body_a's): the axis, world frame at the start (not zero)
+  Vec3 axis_b{1.0f, 0.0f, 0.0f};      ///< universal, required: body_b's axis, world frame at the start, perpendicular to axis
   /// hinge: the range of the angle of body_b about the axis relative to body_a, degrees from the
   /// start (lower <= upper, in [-180, 180]); only when has_limits.
   std::array<float, 2> limits{-180.0f, 180.0f};
@@ -145,9 +146,10 @@ struct JointDef {
   /// when has_travel; else free along the axis.
   std::array<float, 2> travel{0.0f, 0.0f};
   float target_angle = 0.0f;          ///< hinge motor: degrees, when has_target_angle
-  float target_velocity = 0.0f;       ///< hinge motor: degrees/s, when has_target_velocity
+  float target_velocity = 0.0f;       ///< hinge motor: degrees/s; slider motor: m/s; when has_target_velocity
+  float target_position = 0.0f;       ///< slider motor: m along the axis from the start, when has_target_position
   float compliance = 0.0f;            ///< m/N and rad/(N m) (>= 0); 0 = rigid
-  float motor_compliance = 0.0f;      ///< rad/(N m) (>= 0); 0 = a rigid drive
+  float motor_compliance = 0.0f;      ///< hinge: rad/(N m), slider: m/N (>= 0); 0 = a rigid drive
   // Not keys: which of the optional keys the scene gave.
   bool has_anchor_b = false;
   bool has_limits = false;
@@ -155,6 +157,7 @@ struct JointDef {
   bool has_travel = false;
   bool has_target_angle = false;
   bool has_target_velocity = false;
+  bool has_target_position = false;
 };
 
 /// One entry of "particles": a raw particle (for raw constraints and worked examples).

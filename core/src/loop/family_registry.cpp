@@ -10,7 +10,9 @@
 #include "families/contact/contact_family.hpp"
 #include "families/distance/distance_family.hpp"
 #include "families/fluid/fluid_family.hpp"
+#include "families/fluid_body/fluid_body_family.hpp"
 #include "families/motion/motion_family.hpp"
+#include "families/rigid/particle_body_contacts.hpp"
 #include "families/rigid/rigid_family.hpp"
 #include "families/shape/shape_family.hpp"
 
@@ -66,10 +68,10 @@ void build_shapes(FamilyBuild& b) {
 }
 
 void build_contact(FamilyBuild& b) {
+  if (!ParticleContactStage::needed(b.scene)) return;
   const ClothFamily* cloth = b.find<ClothFamily>();
-  if (cloth == nullptr || !ParticleContactStage::needed(b.scene)) return;
   const FluidFamily* fluid = b.find<FluidFamily>();
-  b.add(std::make_unique<ContactFamily>(cloth->solver(), b.scene.domain, b.store,
+  b.add(std::make_unique<ContactFamily>(cloth ? &cloth->solver() : nullptr, b.scene, b.store,
                                         fluid ? &fluid->neighborhood() : nullptr,
                                         fluid ? fluid->solver().particle_radius() : 0.0f));
 }
@@ -82,9 +84,27 @@ void build_distance(FamilyBuild& b) {
 void build_colliders(FamilyBuild& b) { b.add(std::make_unique<ColliderFamily>(b.scene, b.store)); }
 
 // Rigid bodies are not particles: they have their own state, and their joints join only them.
+// Their contacts share the mesh colliders' fields that the colliders' row built.
 void build_rigid(FamilyBuild& b) {
   if (b.scene.rigid_bodies.empty()) return;
-  b.add(std::make_unique<RigidFamily>(b.scene));
+  const ColliderFamily* colliders = b.find<ColliderFamily>();
+  b.add(std::make_unique<RigidFamily>(
+      b.scene, colliders ? std::span(colliders->mesh_fields()) : std::span<const std::shared_ptr<const MeshSdf>>()));
+}
+
+// Cloth and shape particles against the bodies, two-way: only where both are in the scene.
+void build_particle_body_contacts(FamilyBuild& b) {
+  RigidFamily* rigid = b.find<RigidFamily>();
+  if (rigid == nullptr || !ParticleBodyContacts::needed(b.scene)) return;
+  b.add(std::make_unique<ParticleBodyContacts>(b.scene, b.store, rigid->bodies()));
+}
+
+// Bodies in fluid: their boundary particles in the fluid's density (only with both sections).
+void build_fluid_body(FamilyBuild& b) {
+  FluidFamily* fluid = b.find<FluidFamily>();
+  RigidFamily* rigid = b.find<RigidFamily>();
+  if (fluid == nullptr || rigid == nullptr) return;
+  b.add(std::make_unique<FluidBodyFamily>(b.scene, b.store, *fluid, *rigid));
 }
 
 constexpr FamilyRow kRows[] = {
@@ -97,6 +117,8 @@ constexpr FamilyRow kRows[] = {
     {"distance_constraints", Phase::OnParticles, build_distance},
     {"colliders", Phase::OnParticles, build_colliders},
     {"rigid_bodies", Phase::OnParticles, build_rigid, make_body_exporter},
+    {"rigid_bodies", Phase::OnParticles, build_particle_body_contacts},
+    {"rigid_bodies", Phase::OnParticles, build_fluid_body},
 };
 
 }  // namespace

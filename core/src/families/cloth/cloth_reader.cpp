@@ -81,7 +81,8 @@ const KeyTable<ClothDef>& cloth_keys() {
       K("self_collision", &ClothDef::self_collision)
           .doc("contacts between vertices of this cloth that share no triangle"),
       K("friction", &ClothDef::friction, Range::at_least(0))
-          .doc("Coulomb friction of particle contacts (the largest of the cloths' values is used)"),
+          .doc("Coulomb friction of particle contacts (the largest of the cloths' values is used); "
+               "against a rigid body, sqrt(this x the body's `friction`)"),
       K("pins", &ClothDef::pins, Range::at_least(0))
           .valid_note("< the number of vertices")
           .doc("vertices pinned in place (mass 0)"),

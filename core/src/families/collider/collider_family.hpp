@@ -16,7 +16,8 @@ namespace seiche {
 
 /// The signed distance field of mesh collider `c` (scene.colliders[index]): sampled at its
 /// `voxel_size`, or a 64th of the mesh's largest side, over the mesh's box grown by 4 samples. The
-/// particles' collisions and the rigid bodies' contacts (families/rigid/world_surfaces.hpp) use it.
+/// collider family builds it once; the particles' collisions and the rigid bodies' contacts
+/// (families/rigid/world_surfaces.hpp) share it.
 std::unique_ptr<MeshSdf> build_collider_sdf(const ColliderDef& c, std::size_t index);
 
 class ColliderFamily final : public Family {
@@ -27,9 +28,13 @@ class ColliderFamily final : public Family {
 
   void add_passes(std::vector<Pass>& passes) override;
 
+  /// The fields of the mesh colliders, one per mesh collider in scene order: the rigid bodies'
+  /// contacts share them (a field is built once per scene).
+  const std::vector<std::shared_ptr<const MeshSdf>>& mesh_fields() const { return mesh_sdfs_; }
+
  private:
   ParticleStore& store_;
-  std::vector<std::unique_ptr<MeshSdf>> mesh_sdfs_;  // the fields of the mesh colliders
+  std::vector<std::shared_ptr<const MeshSdf>> mesh_sdfs_;  // the fields of the mesh colliders
   kernels::CollisionParams params_;
   std::vector<kernels::CollisionShape> shapes_;
 };

@@ -1,7 +1,8 @@
-// Particle contacts of cloth (particle_contact_stage.hpp): candidate pairs found once per
-// substep on the predicted positions (after the fluid's neighbor stage, whose grid it reads for
-// cloth-fluid pairs), the contacts solved every iteration. Present when a cloth collides with
-// itself, with another cloth or with fluid (ParticleContactStage::needed).
+// Particle contacts of cloth and shapes (particle_contact_stage.hpp): candidate pairs found once
+// per substep on the predicted positions (after the fluid's neighbor stage, whose grid it reads
+// for cloth-fluid pairs), the contacts solved every iteration. Present when a cloth collides with
+// itself, with another cloth or with fluid, or shapes meet shapes or cloth
+// (ParticleContactStage::needed).
 #pragma once
 
 #include <memory>
@@ -15,11 +16,11 @@ namespace seiche {
 
 class ContactFamily final : public Family {
  public:
-  /// `fluid`: the fluid's neighbor stage, or null without fluid; `fluid_radius`: its particles'
-  /// collision radius (0 without fluid).
-  ContactFamily(const ClothSolver& cloth, const DomainDef& domain, ParticleStore& store,
-                const Neighborhood* fluid, float fluid_radius)
-      : store_(store), fluid_(fluid), stage_(std::make_unique<ParticleContactStage>(cloth, domain, fluid_radius)) {}
+  /// `cloth`: the scene's cloths, or null without cloth; `fluid`: the fluid's neighbor stage, or
+  /// null without fluid; `fluid_radius`: its particles' collision radius (0 without fluid).
+  ContactFamily(const ClothSolver* cloth, const SceneDef& scene, ParticleStore& store, const Neighborhood* fluid,
+                float fluid_radius)
+      : store_(store), fluid_(fluid), stage_(std::make_unique<ParticleContactStage>(cloth, scene, fluid_radius)) {}
 
   void add_passes(std::vector<Pass>& passes) override;
 

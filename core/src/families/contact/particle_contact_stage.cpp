@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 
 #include <tbb/parallel_for.h>
 
@@ -9,51 +10,74 @@
 
 namespace seiche {
 
+bool ParticleContactStage::shapes_touch(const SceneDef& scene) {
+  return scene.shapes.size() > 1 || (!scene.shapes.empty() && !scene.cloths.empty());
+}
+
 bool ParticleContactStage::needed(const SceneDef& scene) {
+  if (shapes_touch(scene)) return true;
   if (scene.cloths.empty()) return false;
   if (scene.cloths.size() > 1 || !scene.fluids.empty()) return true;
   return scene.cloths[0].self_collision;
 }
 
-ParticleContactStage::ParticleContactStage(const ClothSolver& cloth, const DomainDef& domain,
-                                           float fluid_radius)
-    : cloth_(cloth), fluid_radius_(fluid_radius) {
-  for (std::size_t c = 0; c < cloth.cloth_count(); ++c) {
-    max_cloth_distance_ = std::max(max_cloth_distance_, cloth.thickness(c));
-    friction_ = std::max(friction_, cloth.friction(c));
+ParticleContactStage::ParticleContactStage(const ClothSolver* cloth, const SceneDef& scene, float fluid_radius)
+    : cloth_(cloth), fluid_radius_(fluid_radius), with_shapes_(shapes_touch(scene)) {
+  for (std::size_t c = 0; cloth != nullptr && c < cloth->cloth_count(); ++c) {
+    max_distance_ = std::max(max_distance_, cloth->thickness(c));
+    friction_ = std::max(friction_, cloth->friction(c));
   }
-  for (int a = 0; a < 3; ++a) domain_min_[a] = domain.min[a], domain_max_[a] = domain.max[a];
+  // Two shapes' particles touch at the sum of their radii (half their spacings): at most the
+  // largest spacing.
+  if (with_shapes_)
+    for (const ShapeDef& shape : scene.shapes) max_distance_ = std::max(max_distance_, shape.spacing);
+  shape_count_ = with_shapes_ ? scene.shapes.size() : 0;
+  for (int a = 0; a < 3; ++a) domain_min_[a] = scene.domain.min[a], domain_max_[a] = scene.domain.max[a];
 }
 
-// Calls visit(j, contact_distance) for every candidate partner of cloth particle i, cloth
-// partners first (in grid order), then fluid partners (in the fluid grid's order).
+// Calls visit(j, contact_distance) for every candidate partner of grid particle i (cloth or
+// shape), grid partners first (in grid order), then, for a cloth particle, fluid partners (in the
+// fluid grid's order).
 template <class Visit>
 void ParticleContactStage::visit_candidates(const ParticleStore& store, const Neighborhood* fluid,
                                             std::uint32_t i, Visit&& visit) const {
   const float xi = store.px[i], yi = store.py[i], zi = store.pz[i];
   if (!std::isfinite(xi) || !std::isfinite(yi) || !std::isfinite(zi)) return;
-  const std::uint32_t ci = store.phase[i] >> 8;
-  const std::uint32_t vi = std::uint32_t(store.id[i] - cloth_.first_id(ci));
-  const float ti = cloth_.thickness(ci);
+  const std::uint32_t ci = store.phase[i] >> 8;  // i's cloth or shape
+  const bool i_cloth = phase_material(store.phase[i]) == Material::Cloth;
+  const std::uint32_t vi = i_cloth ? std::uint32_t(store.id[i] - cloth_->first_id(ci)) : 0;
+  const float ti = i_cloth ? cloth_->thickness(ci) : 0.0f;
 
-  auto visit_cloth = [&](std::uint32_t k) {
+  // With shapes in the grid or not (a compile-time flag, so that the cloth-only scan is the
+  // cloth-only code).
+  auto visit_grid = [&](std::uint32_t k, auto shapes_in_grid) {
+    constexpr bool kShapes = decltype(shapes_in_grid)::value;
     const std::uint32_t j = grid_.order()[k];
     if (j == i) return;
     const std::uint32_t cj = store.phase[j] >> 8;
-    const bool same_cloth = cj == ci;
-    if (same_cloth && !cloth_.self_collision(ci)) return;
-    const float r = same_cloth ? ti : 0.5f * (ti + cloth_.thickness(cj));
+    bool same_cloth = false;
+    float r;
+    if (kShapes && !(i_cloth && phase_material(store.phase[j]) == Material::Cloth)) {
+      // A shape with a cloth or with another shape: the sum of their collision radii (half a
+      // shape's spacing, half a cloth's thickness). A shape's own particles never touch.
+      if (!i_cloth && phase_material(store.phase[j]) == Material::Shape && cj == ci) return;
+      r = store.radius[i] + store.radius[j];
+    } else {
+      same_cloth = cj == ci;
+      if (same_cloth && !cloth_->self_collision(ci)) return;
+      r = same_cloth ? ti : 0.5f * (ti + cloth_->thickness(cj));
+    }
     const kernels::Float4& q = sorted_[k];
     const float dx = xi - q.x, dy = yi - q.y, dz = zi - q.z;
     const float reach = kCandidateMargin * r;
     if (!(dx * dx + dy * dy + dz * dz < reach * reach)) return;
-    if (same_cloth && cloth_.adjacent(ci, vi, std::uint32_t(store.id[j] - cloth_.first_id(cj)))) return;
+    if (same_cloth && cloth_->adjacent(ci, vi, std::uint32_t(store.id[j] - cloth_->first_id(cj)))) return;
     visit(j, r);
   };
 
-  // Cloth partners: the cloth grid's cells are at least twice the largest candidate distance, so
-  // the 2 x 2 x 2 cells nearest to p_i hold every particle within it (a cell per axis on each
-  // side of the cell boundary closest to p_i).
+  // Grid partners: the grid's cells are at least twice the largest candidate distance, so the
+  // 2 x 2 x 2 cells nearest to p_i hold every particle within it (a cell per axis on each side of
+  // the cell boundary closest to p_i).
   {
     const neighbor::GridSpec& s = grid_.spec();
     const float p[3] = {xi, yi, zi};
@@ -64,14 +88,21 @@ void ParticleContactStage::visit_candidates(const ParticleStore& store, const Ne
       lo[a] = std::int32_t(first);
       hi[a] = std::min(lo[a] + 1, s.dims[a] - 1);
     }
-    for (std::int32_t z = lo[2]; z <= hi[2]; ++z)
-      for (std::int32_t y = lo[1]; y <= hi[1]; ++y)
-        for (std::int32_t x = lo[0]; x <= hi[0]; ++x) {
-          const std::uint32_t cell = grid_.cell_index(x, y, z);
-          for (std::uint32_t k = grid_.cell_begin(cell); k < grid_.cell_end(cell); ++k) visit_cloth(k);
-        }
+    auto scan = [&](auto shapes_in_grid) {
+      for (std::int32_t z = lo[2]; z <= hi[2]; ++z)
+        for (std::int32_t y = lo[1]; y <= hi[1]; ++y)
+          for (std::int32_t x = lo[0]; x <= hi[0]; ++x) {
+            const std::uint32_t cell = grid_.cell_index(x, y, z);
+            for (std::uint32_t k = grid_.cell_begin(cell); k < grid_.cell_end(cell); ++k)
+              visit_grid(k, shapes_in_grid);
+          }
+    };
+    if (with_shapes_)
+      scan(std::true_type{});
+    else
+      scan(std::false_type{});
   }
-  if (!fluid || fluid->count() == 0) return;
+  if (!i_cloth || !fluid || fluid->count() == 0) return;
 
   // Fluid partners: the cells of the fluid grid within `cells` cells of p_i's cell.
   const float r = 0.5f * ti + fluid_radius_;
@@ -94,21 +125,26 @@ void ParticleContactStage::visit_candidates(const ParticleStore& store, const Ne
 
 void ParticleContactStage::find_candidates(const ParticleStore& store, const Neighborhood* fluid) {
   const std::size_t n = store.size();
-  // The cloth grid: cloth particles only, sorted by cell into sorted_ (the store stays as it is).
+  // The grid: cloth particles, and shape particles where shapes touch, sorted by cell into
+  // sorted_ (the store stays as it is).
+  if (with_shapes_) find_shape_partner_boxes(store);
   in_grid_.resize(n);
-  cloth_particles_.clear();
+  grid_particles_.clear();
   for (std::size_t i = 0; i < n; ++i) {
-    const bool is_cloth = phase_material(store.phase[i]) == Material::Cloth;
-    in_grid_[i] = is_cloth ? 1 : 0;
-    if (is_cloth) cloth_particles_.push_back(std::uint32_t(i));
+    const Material m = phase_material(store.phase[i]);
+    const bool in = m == Material::Cloth || (with_shapes_ && m == Material::Shape && near_a_partner(store, i));
+    in_grid_[i] = in ? 1 : 0;
+    if (in) grid_particles_.push_back(std::uint32_t(i));
   }
-  // The grid spans the cloths' box (clamped to the domain grown by a cell: particles outside
+  contacts_.clear();
+  if (grid_particles_.empty()) return;  // shapes far apart, no cloth: nothing to touch
+  // The grid spans its particles' box (clamped to the domain grown by a cell: particles outside
   // share the border cells), with cells of twice the largest candidate distance (a query scans
   // 2 x 2 x 2 cells). A draped sheet fills its box sparsely, so the grid gets up to 32 cells per
   // particle before its cells grow.
-  const float cell = 2.0f * kCandidateMargin * max_cloth_distance_;
+  const float cell = 2.0f * kCandidateMargin * max_distance_;
   float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-  for (std::uint32_t i : cloth_particles_) {
+  for (std::uint32_t i : grid_particles_) {
     const float p[3] = {store.px[i], store.py[i], store.pz[i]};
     for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], p[a]), hi[a] = std::max(hi[a], p[a]);
   }
@@ -118,7 +154,7 @@ void ParticleContactStage::find_candidates(const ParticleStore& store, const Nei
     if (!(lo[a] <= hi[a])) lo[a] = domain_min_[a], hi[a] = domain_max_[a];
   }
   const neighbor::GridSpec spec =
-      neighbor::make_grid_spec(lo, hi, cell, std::max<std::size_t>(32 * cloth_particles_.size(), 1 << 16));
+      neighbor::make_grid_spec(lo, hi, cell, std::max<std::size_t>(32 * grid_particles_.size(), 1 << 16));
   grid_.build(spec, store.px.data(), store.py.data(), store.pz.data(), in_grid_.data(), n);
   const std::size_t in_grid = grid_.num_in_grid();
   sorted_.resize(in_grid);
@@ -129,8 +165,8 @@ void ParticleContactStage::find_candidates(const ParticleStore& store, const Nei
     }
   });
 
-  // Cloth particles' lists, each in a fixed order, kMaxCandidates slots per particle.
-  const std::size_t m = cloth_particles_.size();
+  // Grid particles' lists, each in a fixed order, kMaxCandidates slots per particle.
+  const std::size_t m = grid_particles_.size();
   std::vector<std::uint32_t>& count = count_;
   count.assign(m, 0);
   slot_partner_.resize(m * kMaxCandidates);
@@ -140,15 +176,14 @@ void ParticleContactStage::find_candidates(const ParticleStore& store, const Nei
       std::uint32_t* partner = slot_partner_.data() + g * kMaxCandidates;
       float* distance = slot_distance_.data() + g * kMaxCandidates;
       std::uint32_t& n_g = count[g];
-      visit_candidates(store, fluid, cloth_particles_[g], [&](std::uint32_t j, float d) {
+      visit_candidates(store, fluid, grid_particles_[g], [&](std::uint32_t j, float d) {
         if (n_g < kMaxCandidates) partner[n_g] = j, distance[n_g] = d, ++n_g;
       });
     }
   });
 
-  // The contact list: cloth particles with candidates, then the fluid particles they touch,
+  // The contact list: grid particles with candidates, then the fluid particles they touch,
   // each fluid particle's cloth partners in cloth order (a transpose of the cloth lists).
-  contacts_.clear();
   struct FluidPair {
     std::uint32_t fluid, cloth;
     float distance;
@@ -156,7 +191,7 @@ void ParticleContactStage::find_candidates(const ParticleStore& store, const Nei
   std::vector<FluidPair> fluid_pairs;
   for (std::size_t g = 0; g < m; ++g) {
     if (count[g] == 0) continue;
-    const std::uint32_t i = cloth_particles_[g];
+    const std::uint32_t i = grid_particles_[g];
     contacts_.particle.push_back(i);
     for (std::size_t e = g * kMaxCandidates; e < g * kMaxCandidates + count[g]; ++e) {
       const std::uint32_t j = slot_partner_[e];
@@ -179,7 +214,48 @@ void ParticleContactStage::find_candidates(const ParticleStore& store, const Nei
   if (!fluid_pairs.empty()) contacts_.start.push_back(std::uint32_t(contacts_.partner.size()));
 }
 
+// The boxes of the shapes (one each) and of all the cloth (the last), around their predicted
+// positions, grown by the largest candidate distance; per shape, the other boxes its own meets.
+void ParticleContactStage::find_shape_partner_boxes(const ParticleStore& store) {
+  boxes_.assign(shape_count_ + 1, Box{});
+  for (std::size_t i = 0; i < store.size(); ++i) {
+    const Material m = phase_material(store.phase[i]);
+    if (m != Material::Cloth && m != Material::Shape) continue;
+    Box& box = boxes_[m == Material::Cloth ? shape_count_ : std::size_t(store.phase[i] >> 8)];
+    const float p[3] = {store.px[i], store.py[i], store.pz[i]};
+    for (int a = 0; a < 3; ++a) box.lo[a] = std::min(box.lo[a], p[a]), box.hi[a] = std::max(box.hi[a], p[a]);
+  }
+  const float grow = kCandidateMargin * max_distance_;
+  for (Box& box : boxes_)
+    for (int a = 0; a < 3; ++a) box.lo[a] -= grow, box.hi[a] += grow;
+  auto meet = [](const Box& a, const Box& b) {
+    for (int k = 0; k < 3; ++k)
+      if (!(a.lo[k] <= b.hi[k] && b.lo[k] <= a.hi[k])) return false;  // apart (or empty, or NaN)
+    return true;
+  };
+  partner_boxes_.resize(shape_count_);
+  for (std::size_t c = 0; c < shape_count_; ++c) {
+    partner_boxes_[c].clear();
+    for (std::size_t k = 0; k < boxes_.size(); ++k)
+      if (k != c && meet(boxes_[c], boxes_[k])) partner_boxes_[c].push_back(std::uint32_t(k));
+  }
+}
+
+// Whether shape particle i lies in the grown box of another shape or of the cloth: a particle
+// outside every such box is farther than any candidate distance from every partner it could have.
+bool ParticleContactStage::near_a_partner(const ParticleStore& store, std::size_t i) const {
+  const float p[3] = {store.px[i], store.py[i], store.pz[i]};
+  for (std::uint32_t k : partner_boxes_[store.phase[i] >> 8]) {
+    const Box& box = boxes_[k];
+    if (box.lo[0] <= p[0] && p[0] <= box.hi[0] && box.lo[1] <= p[1] && p[1] <= box.hi[1] && box.lo[2] <= p[2] &&
+        p[2] <= box.hi[2])
+      return true;
+  }
+  return false;
+}
+
 void ParticleContactStage::solve(const kernels::ParticleView& p) {
+  if (contacts_.size() == 0) return;  // nothing within reach this substep
   kernels::solve_particle_contacts(p, contacts_, friction_, scratch_);
 }
 

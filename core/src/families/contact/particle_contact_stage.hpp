@@ -6,12 +6,20 @@
 //   cloth-cloth, two cloths    always; contact distance = the mean of their thicknesses
 //   cloth-fluid                when the scene has fluid; contact distance = half the cloth's
 //                              thickness + the fluid particle radius
-// Cloth particles go into a grid of their own (the store is not reordered for it); fluid
-// partners are found in the fluid's neighbor grid. A pair is a candidate when closer than
+//   shape-shape, two shapes    always; contact distance = the sum of their collision radii (half
+//                              of each shape's spacing); a shape's own particles never touch
+//   shape-cloth                always; contact distance = half the shape's spacing + half the
+//                              cloth's thickness
+// Cloth particles, and shape particles within reach of another shape's or a cloth's box, go into
+// a grid of their own (the store is not reordered for it);
+// fluid partners are found in the fluid's neighbor grid. A pair is a candidate when closer than
 // kCandidateMargin times its contact distance, so contacts that close during the iterations
 // are not missed. Lists are in a fixed order: results do not depend on the thread count.
+// Friction: the largest of the cloths' `friction` for every pair (a shape has no coefficient of
+// its own: two shapes in a scene without cloth slide on each other without friction).
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -31,11 +39,15 @@ class ParticleContactStage {
   /// a pile of crumpled cloth reaches it.
   static constexpr std::uint32_t kMaxCandidates = 48;
 
-  /// Whether a scene needs this stage: a cloth with self_collision, two cloths, or cloth and fluid.
+  /// Whether a scene needs this stage: a cloth with self_collision, two cloths, cloth and fluid,
+  /// or shapes that touch (shapes_touch).
   static bool needed(const SceneDef& scene);
+  /// Whether shape particles take part: two shapes or more, or a shape and a cloth.
+  static bool shapes_touch(const SceneDef& scene);
 
-  /// fluid_radius: collision radius of fluid particles (0 without fluid).
-  ParticleContactStage(const ClothSolver& cloth, const DomainDef& domain, float fluid_radius);
+  /// `cloth`: the scene's cloths, or null without cloth; fluid_radius: collision radius of
+  /// fluid particles (0 without fluid).
+  ParticleContactStage(const ClothSolver* cloth, const SceneDef& scene, float fluid_radius);
 
   /// Candidate pairs on the predicted positions. `fluid`: the fluid's neighbor stage, built on
   /// the same positions (fluid particles are store indices [0, fluid->count())), or null.
@@ -43,21 +55,33 @@ class ParticleContactStage {
   void solve(const kernels::ParticleView& p);
 
  private:
+  void find_shape_partner_boxes(const ParticleStore& store);
+  bool near_a_partner(const ParticleStore& store, std::size_t i) const;
   template <class Visit>
   void visit_candidates(const ParticleStore& store, const Neighborhood* fluid, std::uint32_t i, Visit&& visit) const;
 
-  const ClothSolver& cloth_;
+  const ClothSolver* cloth_;  // null without cloth
   float fluid_radius_ = 0.0f;
-  float max_cloth_distance_ = 0.0f;  // largest cloth-cloth contact distance
+  bool with_shapes_ = false;  // shape particles are in the grid (shapes_touch)
+  std::size_t shape_count_ = 0;  // with shapes: the scene's shapes
+  // With shapes, per substep: a box per shape and one for all the cloth (the last), around their
+  // particles grown by the largest candidate distance; per shape, the other boxes that meet its
+  // own. Only a shape particle inside one of those goes into the grid (near_a_partner).
+  struct Box {
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  };
+  std::vector<Box> boxes_;
+  std::vector<std::vector<std::uint32_t>> partner_boxes_;
+  float max_distance_ = 0.0f;  // largest contact distance between grid particles
   float friction_ = 0.0f;
   float domain_min_[3] = {0, 0, 0}, domain_max_[3] = {0, 0, 0};
   neighbor::CellGrid grid_;
   std::vector<std::uint8_t> in_grid_;
   // Scratch of the candidate search, rebuilt from the store's px, py, pz every substep and never
-  // written back (the store owns the positions): cloth particles in grid order: x, y, z, (unused).
+  // written back (the store owns the positions): grid particles in grid order: x, y, z, (unused).
   std::vector<kernels::Float4> sorted_;
-  std::vector<std::uint32_t> cloth_particles_;  // store indices of the cloth particles
-  std::vector<std::uint32_t> count_, slot_partner_;  // per cloth particle: kMaxCandidates slots
+  std::vector<std::uint32_t> grid_particles_;  // store indices of the cloth (and shape) particles
+  std::vector<std::uint32_t> count_, slot_partner_;  // per grid particle: kMaxCandidates slots
   std::vector<float> slot_distance_;
   kernels::ParticleContacts contacts_;
   std::vector<float> scratch_;

@@ -37,6 +37,7 @@ class FluidFamily final : public Family {
   FluidFamily(const SceneDef& scene, ParticleStore& store, std::size_t first, Reorder reorder);
 
   const FluidSolver& solver() const { return *solver_; }
+  FluidSolver& solver() { return *solver_; }
   const Neighborhood& neighborhood() const { return *neighborhood_; }
 
   void add_passes(std::vector<Pass>& passes) override;

@@ -48,6 +48,9 @@ class FluidSolver {
   /// (deterministic: blocked sums in index order), read by predicted_density_error().
   void solve_density(bool measure_error = false);
   double predicted_density_error() const { return predicted_error_; }
+  /// The rigid bodies' boundary, per fluid particle (kernels::PbfParams::boundary), for the
+  /// density passes from now on; null: none.
+  void set_boundary(const kernels::Float4* boundary) { params_.boundary = boundary; }
   void apply_vorticity_confinement(float dt);
   void apply_viscosity();
 

@@ -6,6 +6,7 @@
 
 #include "body_correction.hpp"
 #include "body_shape.hpp"
+#include "body_solid.hpp"
 #include "box_box.hpp"
 
 namespace seiche::rigid {
@@ -59,10 +60,10 @@ BodyContacts::BodyContacts(const SceneDef& scene, const std::vector<std::pair<in
     b.first_point = int(points_.size());
     for (const ContactPoint& p : contact_points(def)) points_.push_back(p);
     b.end_point = int(points_.size());
-    std::shared_ptr<const MeshSdf> sdf;
-    b.solid = body_solid(def, k, sdf);
-    if (sdf) mesh_sdfs_.push_back(sdf);
-    b.extent = mass_properties(body_shape_def(def)).extent;
+    const ShapeDims dims = body_shape_def(def);
+    if (dims.shape == BodyShape::Mesh) mesh_sdfs_.push_back(body_mesh_sdf(def, k));
+    b.solid = body_solid(dims, dims.shape == BodyShape::Mesh ? mesh_sdfs_.back().get() : nullptr);
+    b.extent = mass_properties(dims).extent;
     b.static_friction = def.friction, b.dynamic_friction = def.dynamic_friction, b.restitution = def.restitution;
     bodies_.push_back(b);
   }
@@ -148,9 +149,9 @@ void BodyContacts::solve_pair(Active& pair, RigidBody& a, RigidBody& b) {
       const RigidBody& other = slot.of_a ? b0 : a0;
       const Vec3d centre = own.world_point(c.centre);
       const Vec3d in_other = rotate_back(other.q, centre - other.x);
-      const Solid& other_solid = (slot.of_a ? body_b : body_a).solid;
+      const SolidSurface& other_solid = (slot.of_a ? body_b : body_a).solid;
       SurfacePenetration pen;
-      if (!solid_penetration(other_solid, in_other, c.radius, pen)) continue;
+      if (!penetration(other_solid, in_other, c.radius, pen)) continue;
       const Vec3d m = rotate(other.q, pen.normal);  // out of the other body, world frame
       const Vec3d own_point = centre - c.radius * m, other_point = own_point + pen.depth * m;
       const Vec3d p_a = slot.of_a ? own_point : other_point, p_b = slot.of_a ? other_point : own_point;

@@ -6,8 +6,8 @@
 // Narrow phase: two boxes face against face by separating axes and clipping (box_box.hpp). Any
 // other pair: each body's contact points (world_contacts.hpp: a sphere's centre with its radius,
 // a capsule's cap centres with its radius, box corners, a mesh's vertices) against the other
-// body's solid (world_surfaces.hpp's queries on body_solid: box, sphere, capsule, or the closed
-// mesh's signed distance field in its body frame), the point moved into that body's frame, both
+// body's solid (world_surfaces.hpp's penetration() on body_solid.hpp: box, sphere, capsule, or
+// the closed mesh's signed distance field in its body frame), the point moved into that body's frame, both
 // ways per pair. A ball against a solid is exact: sphere-sphere, sphere-capsule, and
 // capsule-capsule end on or side by side. Known limits: two capsules crossed side on side (no cap
 // centre in the other) pass through each other; two boxes crossed edge on edge (box_box.hpp);
@@ -92,7 +92,7 @@ class BodyContacts {
  private:
   struct Body {
     int first_point = 0, end_point = 0;  // into points_
-    Solid solid;                         // body frame
+    SolidSurface solid;                  // body frame (body_solid.hpp)
     double extent = 0.0;
     double static_friction = 0.0, dynamic_friction = 0.0, restitution = 0.0;
   };

@@ -10,6 +10,7 @@
 
 #include "body_mesh.hpp"
 #include "body_shape.hpp"
+#include "families/fluid_body/body_boundary.hpp"
 #include "rigid_reader.hpp"
 #include "scene/output_name.hpp"
 #include "scene/shared_keys.hpp"
@@ -70,7 +71,8 @@ const KeyTable<RigidBodyDef>& rigid_body_keys() {
       K("fixed", &RigidBodyDef::fixed).doc("the body never moves (infinite mass): an anchor for joints"),
       K("friction", &RigidBodyDef::friction, Range::at_least(0))
           .doc("static Coulomb friction of its contacts with the domain's walls, the colliders and the other "
-               "bodies: sqrt(this x the surface's or the other body's `friction`) is the coefficient"),
+               "bodies: sqrt(this x the surface's or the other body's `friction`) is the coefficient; with cloth "
+               "sqrt(this x the cloth's `friction`), with shape particles this"),
       K("dynamic_friction", &RigidBodyDef::dynamic_friction, Range::at_least(0))
           .doc("sliding friction of those contacts, mixed the same way with the surface's `friction` (another "
                "body's `dynamic_friction`)"),
@@ -174,6 +176,15 @@ void check_rigid_bodies(SceneDef& scene, const std::string& file) {
       fail(file, path + ".density",
            fmt::format("gives a body of {:.3g} kg (density * volume); the lightest allowed is {:g} kg", m.mass,
                        kMinBodyMass));
+    // With a fluid, the body is sampled into boundary particles at its spacing (fluid_body/).
+    if (!scene.fluids.empty()) {
+      const double lattice = fluid_body::boundary_lattice_size(body_shape_def(b), m.extent, scene.fluids[0].spacing);
+      if (lattice > fluid_body::kMaxBoundaryLattice)
+        fail(file, path,
+             fmt::format("is too large for the fluid's spacing {} m: its boundary particles would be sampled on a "
+                         "lattice of {:.0f} points; the limit is {:.0f}",
+                         scene.fluids[0].spacing, lattice, fluid_body::kMaxBoundaryLattice));
+    }
     if (!inside(b.position, scene.domain))
       fail(file, path + ".position",
            fmt::format("{} lies outside the domain {}", format_vec(b.position), format_domain(scene.domain)));

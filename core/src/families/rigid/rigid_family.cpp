@@ -43,6 +43,7 @@ JointType joint_type_of(const std::string& type) {
   if (type == "fixed") return JointType::Fixed;
   if (type == "distance") return JointType::Distance;
   if (type == "slider") return JointType::Slider;
+  if (type == "universal") return JointType::Universal;
   return JointType::Ball;
 }
 
@@ -86,6 +87,12 @@ std::vector<Joint> make_joints(const SceneDef& scene, const std::vector<RigidBod
     const Vec3d normal = perpendicular(axis);
     j.axis_a = rotate_back(a.q, axis), j.axis_b = rotate_back(b.q, axis);
     j.normal_a = rotate_back(a.q, normal), j.normal_b = rotate_back(b.q, normal);
+    if (j.type == JointType::Universal) {
+      // Body b's axis made exactly perpendicular to a's (the reader allows 0.01 degree off).
+      const Vec3d given_b = rigid::normalized_or_zero(to_d(d.axis_b));
+      const Vec3d axis_b = rigid::normalized_or_zero(given_b - dot(given_b, axis) * axis);
+      j.axis_b = rotate_back(b.q, axis_b);
+    }
     j.rest_rotation = conjugate(a.q) * b.q;
     j.compliance = d.compliance;
     if (j.type == JointType::Hinge) {
@@ -98,8 +105,11 @@ std::vector<Joint> make_joints(const SceneDef& scene, const std::vector<RigidBod
     const double start_distance = length(anchor_b - anchor);
     j.min_distance = d.has_distance ? d.distance[0] : start_distance;
     j.max_distance = d.has_distance ? d.distance[1] : start_distance;
-    if (d.has_target_angle) j.motor = MotorMode::Angle, j.target = d.target_angle * kRadiansPerDegree;
-    if (d.has_target_velocity) j.motor = MotorMode::Velocity, j.target = d.target_velocity * kRadiansPerDegree;
+    if (d.has_target_angle) j.motor = MotorMode::Position, j.target = d.target_angle * kRadiansPerDegree;
+    if (d.has_target_position) j.motor = MotorMode::Position, j.target = d.target_position;
+    if (d.has_target_velocity)  // a slider's in m/s, a hinge's in degrees/s
+      j.motor = MotorMode::Velocity,
+      j.target = j.type == JointType::Slider ? double(d.target_velocity) : d.target_velocity * kRadiansPerDegree;
     j.motor_compliance = d.motor_compliance;
     // The joint's length: how far its bodies reach from the anchor (at least a body's size, and
     // a distance joint's longest distance).
@@ -140,14 +150,14 @@ std::vector<std::pair<int, int>> contactless_pairs(const std::vector<Joint>& joi
 
 }  // namespace
 
-RigidFamily::RigidFamily(const SceneDef& scene)
+RigidFamily::RigidFamily(const SceneDef& scene, std::span<const std::shared_ptr<const MeshSdf>> mesh_fields)
     : gravity_(to_d(scene.solver.gravity)),
       lowest_corner_(to_d(scene.domain.min)),
       h_(scene.solver.frame_dt / scene.solver.substeps) {
   std::vector<double> extent;
   bodies_ = make_bodies(scene, extent);
   joints_ = rigid::JointSolver(make_joints(scene, bodies_, extent), bodies_, scene.solver.joint_trees);
-  contacts_ = rigid::WorldContacts(scene, h_);
+  contacts_ = rigid::WorldContacts(scene, h_, mesh_fields);
   body_contacts_ = rigid::BodyContacts(scene, contactless_pairs(joints_.joints(), bodies_), h_);
   start_energy_ = energy();
 }

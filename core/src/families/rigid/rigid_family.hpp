@@ -8,9 +8,9 @@
 //   bodies   position, orientation, velocity, angular velocity (state: checkpoint chunk
 //            "rigid.bodies"); mass and inertia (rebuilt from the scene on a resume)
 //   joints   their connector points and axes in the bodies' frames (from the scene); their
-//            multipliers and motor start angles live within a substep, so are not state, but
-//            for the tree solve's (joint_tree.hpp: its geometric stiffness reads the previous
-//            substep's; checkpoint chunk "rigid.joint_trees", present with a tree)
+//            multipliers and motors' start angles and positions live within a substep, so are
+//            not state, but for the tree solve's (joint_tree.hpp: its geometric stiffness reads the
+//            previous substep's; checkpoint chunk "rigid.joint_trees", present with a tree)
 // Passes: "body predict" (Predict, kBodyPredict) and "body update" (Update, kBodyUpdate);
 // with joints, a reset (BeginSubstep, kJointReset) and "joints" every iteration (kJoints);
 // contacts with the static world (world_contacts.hpp): "body contacts" every iteration
@@ -20,10 +20,14 @@
 // (body_contacts.hpp, where two bodies not on one joint can touch) run in the same two passes,
 // after those with the world (whose touches tell which bodies rest on it); no state either.
 // Error rows: "joint_drift" (each joint's positional error, JointSolver::error, relative to its
-// length), "joint_angle_error" (radians; hinge, fixed and slider joints), "body_energy" (|E - E_0| / E_0, E the bodies' kinetic plus
+// length), "joint_angle_error" (radians; hinge, fixed, slider and universal joints), "body_energy" (|E - E_0| / E_0, E the bodies' kinetic plus
 // gravitational energy, zero at the domain's lowest corner as for the particles).
+// With a fluid, the fluid_body family (families/fluid_body/) couples the bodies and the fluid
+// both ways through bodies().
 #pragma once
 
+#include <memory>
+#include <span>
 #include <vector>
 
 #include "body_contacts.hpp"
@@ -38,7 +42,10 @@ namespace seiche {
 
 class RigidFamily final : public Family {
  public:
-  explicit RigidFamily(const SceneDef& scene);
+  /// `mesh_fields`: the fields of the scene's mesh colliders, built by the collider family
+  /// (ColliderFamily::mesh_fields()), shared by the bodies' contacts with them (none needed in a
+  /// scene without mesh colliders; std::invalid_argument when they do not match).
+  explicit RigidFamily(const SceneDef& scene, std::span<const std::shared_ptr<const MeshSdf>> mesh_fields = {});
 
   void add_passes(std::vector<Pass>& passes) override;
   void measure(FrameMetrics& m) override;
@@ -46,6 +53,9 @@ class RigidFamily final : public Family {
   void restore_state(const CheckpointChunks& chunks) override;
 
   const std::vector<rigid::RigidBody>& bodies() const { return bodies_; }
+  /// The bodies, for the passes of other families that move them (particle_body_contacts.hpp,
+  /// fluid_body/fluid_body_family.hpp).
+  std::vector<rigid::RigidBody>& bodies() { return bodies_; }
   const rigid::JointSolver& joints() const { return joints_; }
   /// Every body's position, orientation and velocities now, in scene order.
   std::vector<BodyPose> poses() const;

@@ -58,7 +58,9 @@ std::vector<ContactPoint> contact_points(const RigidBodyDef& def) {
   return corners;
 }
 
-WorldContacts::WorldContacts(const SceneDef& scene, double substep) : surfaces_(scene), h_(substep) {
+WorldContacts::WorldContacts(const SceneDef& scene, double substep,
+                             std::span<const std::shared_ptr<const MeshSdf>> mesh_fields)
+    : surfaces_(scene, mesh_fields), h_(substep) {
   const Vec3 g = scene.solver.gravity;
   rest_speed_ = 2.0 * std::hypot(double(g[0]), double(g[1]), double(g[2])) * h_;
   for (const RigidBodyDef& def : scene.rigid_bodies) {

@@ -68,8 +68,9 @@ std::vector<ContactPoint> contact_points(const RigidBodyDef& def);
 class WorldContacts {
  public:
   WorldContacts() = default;
-  /// The scene's bodies (their points and materials, in scene order) against its static world.
-  WorldContacts(const SceneDef& scene, double substep);
+  /// The scene's bodies (their points and materials, in scene order) against its static world
+  /// (`mesh_fields`: its mesh colliders' fields, WorldSurfaces).
+  WorldContacts(const SceneDef& scene, double substep, std::span<const std::shared_ptr<const MeshSdf>> mesh_fields);
 
   /// Before the bodies' predict: their velocities before the substep (for restitution), and the
   /// multipliers reset.

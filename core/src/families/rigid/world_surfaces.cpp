@@ -3,12 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 #include <string>
-
-#include "body_shape.hpp"
-#include "body_surface.hpp"
-#include "families/cloth/cloth_mesh.hpp"
-#include "families/collider/collider_family.hpp"
 
 namespace seiche::rigid {
 
@@ -33,12 +29,18 @@ bool out_of_ball(Vec3d p, Vec3d c, double reach, SurfacePenetration& out) {
 
 }  // namespace
 
-WorldSurfaces::WorldSurfaces(const SceneDef& scene) {
+WorldSurfaces::WorldSurfaces(const SceneDef& scene, std::span<const std::shared_ptr<const MeshSdf>> mesh_fields) {
+  const auto is_mesh = [](const ColliderDef& c) { return c.shape == ColliderDef::Shape::Mesh; };
+  const auto mesh_colliders = std::size_t(std::count_if(scene.colliders.begin(), scene.colliders.end(), is_mesh));
+  const auto missing = [](const std::shared_ptr<const MeshSdf>& field) { return !field; };
+  if (mesh_fields.size() != mesh_colliders || std::any_of(mesh_fields.begin(), mesh_fields.end(), missing))
+    throw std::invalid_argument("WorldSurfaces: " + std::to_string(mesh_colliders) +
+                                " mesh colliders need as many fields");
   // The domain's walls: planes facing in, lower then upper, x then y then z.
   const Vec3d lo = to_d(scene.domain.min), hi = to_d(scene.domain.max);
   for (int a = 0; a < 3; ++a)
     for (double sign : {1.0, -1.0}) {
-      Solid s;
+      Surface s;
       s.a = sign > 0.0 ? lo : hi;
       s.b = axis_vector(a, sign);
       s.friction = scene.domain.friction;
@@ -46,7 +48,7 @@ WorldSurfaces::WorldSurfaces(const SceneDef& scene) {
     }
   for (std::size_t k = 0; k < scene.colliders.size(); ++k) {
     const ColliderDef& c = scene.colliders[k];
-    Solid s;
+    Surface s;
     s.shape = c.shape;
     s.friction = c.friction;
     switch (c.shape) {
@@ -55,7 +57,7 @@ WorldSurfaces::WorldSurfaces(const SceneDef& scene) {
       case ColliderDef::Shape::Sphere: s.a = to_d(c.center), s.radius = c.radius; break;
       case ColliderDef::Shape::Capsule: s.a = to_d(c.end_a), s.b = to_d(c.end_b), s.radius = c.radius; break;
       case ColliderDef::Shape::Mesh:
-        mesh_sdfs_.push_back(build_collider_sdf(c, k));
+        mesh_sdfs_.push_back(mesh_fields[mesh_sdfs_.size()]);
         s.sdf = mesh_sdfs_.back().get();
         break;
     }
@@ -63,7 +65,7 @@ WorldSurfaces::WorldSurfaces(const SceneDef& scene) {
   }
 }
 
-bool solid_penetration(const Solid& s, Vec3d p, double r, SurfacePenetration& out) {
+bool penetration(const SolidSurface& s, Vec3d p, double r, SurfacePenetration& out) {
   switch (s.shape) {
     case ColliderDef::Shape::Plane: {
       const double depth = r - dot(p - s.a, s.b);
@@ -112,39 +114,6 @@ bool solid_penetration(const Solid& s, Vec3d p, double r, SurfacePenetration& ou
     }
   }
   return false;
-}
-
-Solid body_solid(const RigidBodyDef& def, std::size_t index, std::shared_ptr<const MeshSdf>& keep) {
-  const ShapeDims d = body_shape_def(def);
-  Solid s;
-  switch (d.shape) {
-    case BodyShape::Box:
-      s.shape = ColliderDef::Shape::Box, s.a = -0.5 * d.size, s.b = 0.5 * d.size;
-      break;
-    case BodyShape::Sphere: s.shape = ColliderDef::Shape::Sphere, s.radius = d.radius; break;
-    case BodyShape::Capsule:
-      s.shape = ColliderDef::Shape::Capsule, s.radius = d.radius;
-      s.a = {0.0, -0.5 * d.length, 0.0}, s.b = {0.0, 0.5 * d.length, 0.0};
-      break;
-    case BodyShape::Mesh: {
-      // The closed triangles in the body frame (centre of mass at the origin, principal axes).
-      const BodySurface surface = body_surface(def);
-      ClothMesh mesh;
-      float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-      for (const Vec3d& v : surface.vertices) {
-        mesh.positions.push_back({float(v.x), float(v.y), float(v.z)});
-        for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], mesh.positions.back()[a]), hi[a] = std::max(hi[a], mesh.positions.back()[a]);
-      }
-      mesh.triangles = surface.triangles;
-      const float voxel = std::max(std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]}) / 32.0f, 1e-6f);
-      auto sdf = std::make_shared<MeshSdf>();
-      build_mesh_sdf(mesh, voxel, 4.0f * voxel, def.mesh.file, "rigid_bodies[" + std::to_string(index) + "].mesh", *sdf);
-      keep = sdf;
-      s.shape = ColliderDef::Shape::Mesh, s.sdf = keep.get();
-      break;
-    }
-  }
-  return s;
 }
 
 }  // namespace seiche::rigid

@@ -11,13 +11,13 @@
 //   mesh:  d = r - sdf(p), n = grad sdf; outside the field's box, from its nearest point c:
 //          d = r - (sdf(c) + |p - c|), n = grad sdf(c)  (an upper bound of sdf(p), equal above a face)
 // A contact is d > 0. Each surface has its Coulomb friction (the domain's `friction` for the
-// walls, the collider's own).
-// The same solids serve the contacts between bodies (body_contacts.hpp): a body's own shape as a
-// box, sphere, capsule or mesh field in its body frame (body_solid), queried with the point moved
-// into that frame.
+// walls, the collider's own). The same shapes, given in a rigid body's own frame, are the bodies'
+// solids for the particles' contacts with them (particle_body_contacts.hpp): one query,
+// penetration(), for both.
 #pragma once
 
 #include <memory>
+#include <span>
 #include <vector>
 
 #include "families/collider/mesh_sdf.hpp"
@@ -31,38 +31,38 @@ struct SurfacePenetration {
   Vec3d normal;        ///< unit, out of the surface
 };
 
-/// One solid: a plane (point a, unit normal b), a box [a, b], a sphere (centre a, radius), a
-/// capsule (ends a and b, radius) or a closed mesh's signed distance field.
-struct Solid {
-  ColliderDef::Shape shape = ColliderDef::Shape::Plane;  // the domain's walls are planes
-  Vec3d a, b;
-  double radius = 0.0;    // sphere, capsule
-  double friction = 0.0;  // a world surface's Coulomb coefficient
-  const MeshSdf* sdf = nullptr;
+/// One solid: a plane, box, sphere, capsule or mesh (its signed distance field), in whatever
+/// frame the ball's centre is given in.
+struct SolidSurface {
+  ColliderDef::Shape shape = ColliderDef::Shape::Plane;  ///< the domain's walls are planes
+  Vec3d a, b;            ///< plane: point, unit normal; box: min, max; sphere: centre; capsule: ends
+  double radius = 0.0;   ///< sphere, capsule
+  double friction = 0.0;
+  const MeshSdf* sdf = nullptr;  ///< mesh: its field (owned by the caller)
 };
 
-/// How deep the ball (p, r) reaches into `solid` (formulas above); false where it does not.
-bool solid_penetration(const Solid& solid, Vec3d p, double r, SurfacePenetration& out);
-
-/// The shape of body `index` (`def`) as a solid in its body frame: a box centred at the origin, a sphere at the
-/// origin, a capsule along y, or a mesh body's field (`keep` receives the field, which the solid
-/// points to: samples of a 32nd of the mesh's largest side, over its box grown by 4 samples).
-Solid body_solid(const RigidBodyDef& def, std::size_t index, std::shared_ptr<const MeshSdf>& keep);
+/// How deep the ball (p, r) reaches into `s` (the formulas above); false where it does not
+/// (depth <= 0).
+bool penetration(const SolidSurface& s, Vec3d p, double r, SurfacePenetration& out);
 
 class WorldSurfaces {
  public:
   WorldSurfaces() = default;
-  explicit WorldSurfaces(const SceneDef& scene);
+  /// The domain's walls and the scene's colliders; `mesh_fields` holds the fields of its mesh
+  /// colliders, one per mesh collider in scene order (ColliderFamily::mesh_fields(): built once,
+  /// shared); std::invalid_argument when one is null or their count is not the mesh colliders'.
+  WorldSurfaces(const SceneDef& scene, std::span<const std::shared_ptr<const MeshSdf>> mesh_fields);
 
   int count() const { return int(surfaces_.size()); }
   double friction(int surface) const { return surfaces_[std::size_t(surface)].friction; }
   /// How deep the ball (p, r) reaches into `surface`; false where it does not (depth <= 0).
   bool penetration(int surface, Vec3d p, double r, SurfacePenetration& out) const {
-    return solid_penetration(surfaces_[std::size_t(surface)], p, r, out);
+    return rigid::penetration(surfaces_[std::size_t(surface)], p, r, out);
   }
 
  private:
-  std::vector<Solid> surfaces_;
+  using Surface = SolidSurface;
+  std::vector<Surface> surfaces_;
   std::vector<std::shared_ptr<const MeshSdf>> mesh_sdfs_;  // the mesh colliders' fields
 };
 

@@ -32,6 +32,21 @@ float iteration_stiffness(const ShapeDef& s, const SolverDef& solver) {
   return float(1.0 - std::pow(1.0 - double(s.stiffness), 1.0 / double(solver.iterations)));
 }
 
+// Each cluster's size: the RMS distance of its members' rest positions from its rest centre of
+// mass, sqrt(sum_k |q_k|^2 / n) (0 for an empty or one-point cluster).
+std::vector<double> cluster_sizes(const kernels::ShapeClusters& clusters) {
+  std::vector<double> sizes(clusters.clusters(), 0.0);
+  for (std::size_t c = 0; c < clusters.clusters(); ++c) {
+    double sum = 0.0;
+    for (std::uint32_t k = clusters.start[c]; k < clusters.start[c + 1]; ++k)
+      sum += double(clusters.rest_x[k]) * clusters.rest_x[k] + double(clusters.rest_y[k]) * clusters.rest_y[k] +
+             double(clusters.rest_z[k]) * clusters.rest_z[k];
+    const std::uint32_t n = clusters.start[c + 1] - clusters.start[c];
+    sizes[c] = n > 0 ? std::sqrt(sum / double(n)) : 0.0;
+  }
+  return sizes;
+}
+
 }  // namespace
 
 std::size_t ShapeFamily::particle_count(const SceneDef& scene) {
@@ -64,11 +79,11 @@ ShapeFamily::ShapeFamily(const SceneDef& scene, ParticleStore& store, std::size_
     for (std::size_t n = clusters_before; n < clusters_.clusters(); ++n) {
       clusters_.linear_blend[n] = s.linear_blend;
       clusters_.plasticity[n] = {s.yield, s.creep, s.max_plastic_strain};
-      spacing_.push_back(s.spacing);
     }
     plastic_ = plastic_ || s.creep > 0.0f;
   }
   clusters_.finish();
+  size_ = cluster_sizes(clusters_);
 }
 
 // The body as one cluster. Equal masses: the rest centre of mass is the lattice's centroid
@@ -149,11 +164,11 @@ void ShapeFamily::add_passes(std::vector<Pass>& passes) {
                       }});
 }
 
-// The rigid fit of each cluster on the final positions x, and each member's distance from it in
-// units of its cluster's spacing. The fit runs on compact copies of the members (positions,
-// inverse masses; one copy per member, so overlapping clusters are fitted each on its own) and
-// of the clusters, so that measuring changes nothing: not the store, not the rotations that
-// warm-start the next solve.
+// The rigid fit of each cluster on the final positions x, and the RMS distance of its members
+// from it relative to the cluster's size (shape_family.hpp). The fit runs on compact copies of
+// the members (positions, inverse masses; one copy per member, so overlapping clusters are fitted
+// each on its own) and of the clusters, so that measuring changes nothing: not the store, not the
+// rotations that warm-start the next solve.
 void ShapeFamily::measure(FrameMetrics& m) {
   const ParticleStore& s = store_;
   const std::size_t members = clusters_.members();
@@ -173,13 +188,20 @@ void ShapeFamily::measure(FrameMetrics& m) {
   goal.px = gx.data(), goal.py = gy.data(), goal.pz = gz.data(), goal.w = w.data();
   kernels::solve_shape_matching(goal, fit);
   double sum = 0.0, worst = 0.0;
-  for (std::size_t c = 0; c < fit.clusters(); ++c)
+  for (std::size_t c = 0; c < fit.clusters(); ++c) {
+    double squares = 0.0;
     for (std::uint32_t k = fit.start[c]; k < fit.start[c + 1]; ++k) {
       const std::uint32_t i = clusters_.particle[k];
-      const double d = std::hypot(double(gx[k]) - s.x[i], double(gy[k]) - s.y[i], double(gz[k]) - s.z[i]) / spacing_[c];
-      sum += d, worst = std::max(worst, d);
+      const double dx = double(gx[k]) - s.x[i], dy = double(gy[k]) - s.y[i], dz = double(gz[k]) - s.z[i];
+      squares += dx * dx + dy * dy + dz * dz;
     }
-  m.errors.push_back({"shape_error", "shape error", ErrorUnit::Ratio, members ? sum / double(members) : 0.0, worst});
+    // A cluster of size 0 (one point, or every point at its centre) has no shape to keep: no error.
+    const std::uint32_t n = fit.start[c + 1] - fit.start[c];
+    const double error = n > 0 && size_[c] > 0.0 ? std::sqrt(squares / double(n)) / size_[c] : 0.0;
+    sum += error, worst = std::max(worst, error);
+  }
+  const std::size_t clusters = fit.clusters();
+  m.errors.push_back({"shape_error", "shape error", ErrorUnit::Ratio, clusters ? sum / double(clusters) : 0.0, worst});
 }
 
 void ShapeFamily::save_state(CheckpointChunks& chunks) const {

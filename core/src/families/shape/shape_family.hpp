@@ -15,8 +15,11 @@
 // Passes: "shape matching" every iteration (pass_order::kShapeMatching), before the collisions;
 // "shape plasticity" once per substep after the update (pass_order::kShapePlasticity), where a
 // body is plastic.
-// Error row "shape_error": each member's distance from its cluster's rigid fit (of its rest
-// shape, plastic deformation included) on the final positions, in units of the body's spacing.
+// Error row "shape_error": per cluster, the RMS distance of its members from its best rigid fit
+// (of its rest shape, plastic deformation included) on the final positions, relative to the
+// cluster's size: the RMS distance of its members' rest positions from their rest centre of mass,
+//   e_c = sqrt(sum_k |x_k - g_k|^2 / n_c) / sqrt(sum_k |q_k|^2 / n_c)
+// (g_k the fit's goal, q_k the rest offset, n_c the members); mean and max over the clusters.
 #pragma once
 
 #include <cstddef>
@@ -51,7 +54,7 @@ class ShapeFamily final : public Family {
 
   ParticleStore& store_;
   kernels::ShapeClusters clusters_;
-  std::vector<float> spacing_;  // per cluster: the unit of its error row
+  std::vector<double> size_;    // per cluster: the RMS distance of its rest offsets, the error row's unit
   bool plastic_ = false;        // a body flows: the plasticity pass and chunk
 };
 

@@ -4,6 +4,10 @@
 // With V = m / rho0 the rest volume of a particle and W, grad W the kernels of sph_kernels.hpp:
 //   density      rho_i = m (W(0) + sum_j W(|p_i - p_j|)) + rho0 f_walls(p_i)
 //                (f_walls, its gradient and its push in dp_i: see pbf_walls.hpp)
+//                + rho_b,i where a boundary is given (rigid bodies' boundary particles, from
+//                core/src/families/fluid_body/: their density at p_i and their part g_b,i of
+//                grad_{p_i} C_i, which joins the gradient sum of the denominator; their part of
+//                dp_i, lambda_i g_b,i, is the caller's, with the reaction on the bodies)
 //   constraint   C_i = max(rho_i / rho0 - 1, 0)           (unilateral: no pull at free surfaces)
 //   gradients    grad_{p_i} C_i = V sum_j grad W_ij,       grad_{p_j} C_i = -V grad W_ij
 //   lambda       lambda_i = -C_i / (sum_k |grad_{p_k} C_i|^2 + eps)
@@ -55,6 +59,9 @@ struct PbfParams {
   float tensile_dq = 0.2f;   ///< fraction of h
   /// The rest spacing s (m), from which on s_corr is 0 (0: the paper's unshifted term).
   float tensile_rest_distance = 0.0f;
+  /// Per particle (g_b.x, g_b.y, g_b.z, rho_b) of the boundary particles near it, or null (no
+  /// boundary: pass 1 reads nothing more). Read by pass 1 only.
+  const Float4* boundary = nullptr;
 };
 
 /// The sum over an ideal lattice of spacing s of W(|k s|) (self included), for the particle mass

@@ -1,0 +1,182 @@
+// Two-way coupling of rigid bodies and fluid (the formulas are in fluid_body_family.hpp).
+#include "fluid_body_family.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "families/rigid/body_correction.hpp"
+#include "seiche/kernels/blocked_reduce.hpp"
+#include "seiche/kernels/sph_kernels.hpp"
+
+namespace seiche {
+
+using fluid_body::BodyBoundary;
+using rigid::RigidBody;
+using rigid::Vec3d;
+
+namespace {
+
+// Per body, the impulse (kg m) and its moment about the centre (kg m^2), world frame: 6 doubles.
+using BodyImpulses = std::vector<double>;
+
+void add_impulse(BodyImpulses& sum, std::size_t body, Vec3d p, Vec3d moment) {
+  double* s = &sum[6 * body];
+  s[0] += p.x, s[1] += p.y, s[2] += p.z, s[3] += moment.x, s[4] += moment.y, s[5] += moment.z;
+}
+
+// Sums per block of particles, then the blocks in index order; moves each body once.
+template <class PerParticle>
+void solve_and_move_bodies(std::size_t n, std::vector<RigidBody>& bodies, PerParticle&& per_particle) {
+  const BodyImpulses zero(6 * bodies.size(), 0.0);
+  const BodyImpulses total = kernels::blocked_reduce(
+      n, zero,
+      [&](std::size_t begin, std::size_t end) {
+        BodyImpulses part = zero;
+        for (std::size_t i = begin; i < end; ++i) per_particle(i, part);
+        return part;
+      },
+      [](BodyImpulses& acc, const BodyImpulses& part) {
+        for (std::size_t k = 0; k < acc.size(); ++k) acc[k] += part[k];
+      });
+  for (std::size_t k = 0; k < bodies.size(); ++k) {
+    const double* s = &total[6 * k];
+    rigid::apply_positional_impulse(bodies[k], {0.0, 0.0, 0.0}, {s[0], s[1], s[2]});
+    rigid::apply_angular_impulse(bodies[k], {s[3], s[4], s[5]});
+  }
+}
+
+}  // namespace
+
+FluidBodyFamily::FluidBodyFamily(const SceneDef& scene, ParticleStore& store, FluidFamily& fluid, RigidFamily& rigid)
+    : store_(store), fluid_(fluid), rigid_(rigid) {
+  particle_radius_ = fluid.solver().particle_radius();
+  const double spacing = scene.fluids[0].spacing;
+  const double h = fluid.solver().kernel_radius();
+  for (std::size_t k = 0; k < scene.rigid_bodies.size(); ++k)
+    boundaries_.push_back(fluid_body::sample_body_boundary(scene.rigid_bodies[k], k, spacing, h));
+}
+
+void FluidBodyFamily::add_passes(std::vector<Pass>& passes) {
+  passes.push_back({"fluid-body boundary", Stage::Iterate, pass_order::kFluidBodyBoundary, true,
+                    [this](const StepContext&) { gather_boundary(); }});
+  passes.push_back({"fluid-body density", Stage::Iterate, pass_order::kFluidBodyDensity, true,
+                    [this](const StepContext&) { solve_density(); }});
+  passes.push_back({"fluid-body separation", Stage::Iterate, pass_order::kFluidBodySeparation, true,
+                    [this](const StepContext&) { separate(); }});
+}
+
+template <class Visit>
+void FluidBodyFamily::for_each_site(Vec3d p, Visit&& visit) const {
+  const std::vector<RigidBody>& bodies = rigid_.bodies();
+  for (std::size_t k = 0; k < bodies.size(); ++k) {
+    const RigidBody& b = bodies[k];
+    const BodyBoundary& boundary = boundaries_[k];
+    const Vec3d d = p - b.x;
+    if (dot(d, d) >= boundary.reach * boundary.reach) continue;
+    const Vec3d q = rotate_back(b.q, d);
+    boundary.for_each_site_near(q, [&](std::uint32_t s) { visit(k, s, q - boundary.sites[s]); });
+  }
+}
+
+void FluidBodyFamily::gather_boundary() {
+  const kernels::PbfParams& prm = fluid_.solver().params();
+  const kernels::SphKernel kernel(prm.h);
+  const double rho0 = prm.rest_density;
+  const std::size_t n = fluid_.neighborhood().count();
+  boundary_.resize(n);
+  kept_.resize(n);
+  const float* px = store_.px.data();
+  const float* py = store_.py.data();
+  const float* pz = store_.pz.data();
+  const std::vector<RigidBody>& bodies = rigid_.bodies();
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const auto& range) {
+    for (std::size_t i = range.begin(); i != range.end(); ++i) {
+      const Vec3d p{px[i], py[i], pz[i]};
+      kept_[i] = p;
+      double density = 0.0;
+      Vec3d gradient;  // world frame
+      std::size_t body = bodies.size();
+      Vec3d local;     // body frame, of `body`
+      const auto flush = [&]() {
+        if (body != bodies.size()) gradient += rotate(bodies[body].q, local);
+      };
+      for_each_site(p, [&](std::size_t k, std::uint32_t s, Vec3d r) {
+        if (k != body) flush(), body = k, local = {};
+        const float r2 = float(dot(r, r));
+        const double psi = boundaries_[k].psi[s];
+        density += rho0 * psi * double(kernel.poly6(r2));
+        local += (psi * double(kernel.spiky_grad_over_r(r2))) * r;
+      });
+      flush();
+      boundary_[i] = {float(gradient.x), float(gradient.y), float(gradient.z), float(density)};
+    }
+  });
+  fluid_.solver().set_boundary(boundary_.data());
+}
+
+void FluidBodyFamily::solve_density() {
+  const kernels::PbfParams& prm = fluid_.solver().params();
+  const kernels::SphKernel kernel(prm.h);
+  const double mass = prm.mass;
+  std::vector<RigidBody>& bodies = rigid_.bodies();
+  float* px = store_.px.data();
+  float* py = store_.py.data();
+  float* pz = store_.pz.data();
+  const float* lambda = store_.lambda.data();
+  solve_and_move_bodies(fluid_.neighborhood().count(), bodies, [&](std::size_t i, BodyImpulses& impulses) {
+    if (!(boundary_[i].w > 0.0f) || !(lambda[i] < 0.0f)) return;
+    const double lambda_i = lambda[i];
+    // Per body, the body-frame sums of lambda_i psi_b grad W and of their moments about the centre.
+    Vec3d dp;
+    std::size_t body = bodies.size();
+    Vec3d shift, moment;
+    const auto flush = [&]() {
+      if (body == bodies.size()) return;
+      const RigidBody& b = bodies[body];
+      const Vec3d world_shift = rotate(b.q, shift);
+      dp += world_shift;
+      add_impulse(impulses, body, -mass * world_shift, rotate(b.q, -mass * moment));
+    };
+    for_each_site(kept_[i], [&](std::size_t k, std::uint32_t s, Vec3d r) {
+      if (k != body) flush(), body = k, shift = {}, moment = {};
+      const double g = double(kernel.spiky_grad_over_r(float(dot(r, r))));
+      const Vec3d step = (lambda_i * boundaries_[k].psi[s] * g) * r;
+      shift += step;
+      moment += cross(boundaries_[k].sites[s], step);
+    });
+    flush();
+    px[i] += float(dp.x), py[i] += float(dp.y), pz[i] += float(dp.z);
+  });
+}
+
+void FluidBodyFamily::separate() {
+  const double inverse_mass = 1.0 / double(fluid_.solver().particle_mass());
+  std::vector<RigidBody>& bodies = rigid_.bodies();
+  float* px = store_.px.data();
+  float* py = store_.py.data();
+  float* pz = store_.pz.data();
+  solve_and_move_bodies(fluid_.neighborhood().count(), bodies, [&](std::size_t i, BodyImpulses& impulses) {
+    Vec3d p{px[i], py[i], pz[i]};
+    bool moved = false;
+    for (std::size_t k = 0; k < bodies.size(); ++k) {
+      const RigidBody& b = bodies[k];
+      const double reach = boundaries_[k].extent + particle_radius_;
+      const Vec3d r = p - b.x;
+      if (dot(r, r) >= reach * reach) continue;
+      rigid::SurfacePenetration contact;
+      if (!rigid::penetration(boundaries_[k].solid, rotate_back(b.q, r), particle_radius_, contact)) continue;
+      const Vec3d n = rotate(b.q, contact.normal);
+      const double denominator = inverse_mass + rigid::positional_inverse_mass(b, r, n);
+      const double dlambda = contact.depth / denominator;  // denominator >= 1/m > 0
+      p += (dlambda * inverse_mass) * n;
+      add_impulse(impulses, k, -dlambda * n, cross(r, -dlambda * n));
+      moved = true;
+    }
+    if (moved) px[i] = float(p.x), py[i] = float(p.y), pz[i] = float(p.z);
+  });
+}
+
+}  // namespace seiche

@@ -1,0 +1,71 @@
+// Two-way coupling of the rigid bodies with the fluid (docs/design.md, "Fluid and rigid bodies"):
+// each body's boundary particles (body_boundary.hpp) take part in the fluid's density
+// constraint, and a separation keeps every fluid particle out of every body's solid; what either
+// does to a fluid particle it does, reversed, to the body.
+//
+// Where the boundary particles live: in this family, in each body's frame, not in the particle
+// store. They move only with their body, so their body-frame positions, volumes and grid are
+// built once; a fluid particle near a body is turned into the body's frame and looks up the 27
+// cells around it there. The store, the fluid's grid, its neighbor lists and its density kernels
+// stay as they are: a scene without bodies runs the fluid exactly as before, and a scene without
+// fluid builds no boundary.
+//
+// Per iteration, with x_b a site in the world and m the fluid particle's mass:
+//   "fluid-body boundary" (before the fluid's density pass), for each fluid particle i near a
+//     body: the boundary's density and its part of the constraint's gradient,
+//       rho_b,i = sum_b rho0 psi_b W(|p_i - x_b|),   g_b,i = sum_b psi_b grad W(p_i - x_b)
+//     which the fluid's pass adds to rho_i and to grad_{p_i} C_i (kernels/pbf_density.hpp), so
+//     lambda_i sees the bodies as fluid; p_i is kept.
+//   "fluid-body density" (after it), with the fluid's lambda_i of this iteration:
+//       dp_i = lambda_i g_b,i   (the boundary's part of lambda_i grad_{p_i} C_i)
+//     and each site's share, -m lambda_i psi_b grad W(p_i - x_b) at the kept p_i, is an impulse
+//     on its body at x_b: the pair's momentum is kept exactly.
+//   "fluid-body separation" (after the joints and the body contacts): a fluid particle whose
+//     ball (radius s/2) reaches depth d into a body's solid along normal n (the solid's shape
+//     query of body_solid.hpp in the body frame) is a contact:
+//       dlambda = d / (1/m + w_body),  w_body = 1/M + (r x n)^T I^-1 (r x n),  r = p_i - x_body
+//       p_i += dlambda / m n,  the body gets the impulse -dlambda n at r
+// Fluid particles write only their own positions (in parallel); the impulses on a body add up
+// per block of particles and the blocks in index order, then move the body once (linear part
+// through 1/M, angular through I^-1: body_correction.hpp), so the bits do not depend on the
+// thread count.
+#pragma once
+
+#include <vector>
+
+#include "body_boundary.hpp"
+#include "families/fluid/fluid_family.hpp"
+#include "families/rigid/rigid_family.hpp"
+#include "loop/family.hpp"
+#include "seiche/particle_store.hpp"
+#include "seiche/scene.hpp"
+
+namespace seiche {
+
+class FluidBodyFamily final : public Family {
+ public:
+  FluidBodyFamily(const SceneDef& scene, ParticleStore& store, FluidFamily& fluid, RigidFamily& rigid);
+
+  void add_passes(std::vector<Pass>& passes) override;
+
+  const std::vector<fluid_body::BodyBoundary>& boundaries() const { return boundaries_; }
+
+ private:
+  void gather_boundary();
+  void solve_density();
+  void separate();
+  /// Calls visit(body k, site s, q - site) for every site within reach of world point p (q: p
+  /// in body k's frame).
+  template <class Visit>
+  void for_each_site(rigid::Vec3d p, Visit&& visit) const;
+
+  ParticleStore& store_;
+  FluidFamily& fluid_;
+  RigidFamily& rigid_;
+  std::vector<fluid_body::BodyBoundary> boundaries_;  // per body, scene order
+  std::vector<kernels::Float4> boundary_;  // per fluid particle: (g_b,i, rho_b,i)
+  std::vector<rigid::Vec3d> kept_;          // per fluid particle: p_i when g_b,i was taken
+  double particle_radius_;
+};
+
+}  // namespace seiche

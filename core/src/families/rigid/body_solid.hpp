@@ -1,0 +1,25 @@
+// A rigid body's solid in its own frame (centre of mass at the origin, axes the body's), as one
+// surface of world_surfaces.hpp, so that its penetration() query answers for the body: a box
+// [-size/2, size/2], a sphere or a capsule about the origin (the capsule's segment along y), a
+// mesh through the signed distance field of its body-frame surface (body_surface.hpp), sampled as
+// the mesh colliders are (a voxel of 1/64 of the mesh's largest extent, a band of 4 voxels).
+// The particles' contacts with bodies (particle_body_contacts.hpp) and the fluid's
+// (families/fluid_body/) keep particles out of the bodies with it.
+#pragma once
+
+#include <cstddef>
+#include <memory>
+
+#include "body_shape.hpp"
+#include "families/collider/mesh_sdf.hpp"
+#include "seiche/scene.hpp"
+#include "world_surfaces.hpp"
+
+namespace seiche::rigid {
+
+/// A mesh body's field (body `index` of the scene: "rigid_bodies[index].mesh" in its errors).
+std::shared_ptr<const MeshSdf> body_mesh_sdf(const RigidBodyDef& def, std::size_t index);
+/// The solid of shape `d`; a mesh's through `sdf` (owned by the caller).
+SolidSurface body_solid(const ShapeDims& d, const MeshSdf* sdf);
+
+}  // namespace seiche::rigid
