@@ -31,6 +31,7 @@
 #include <vector>
 
 #include "families/collider/collider_family.hpp"
+#include "families/fluid_body/body_grid.hpp"
 #include "families/rigid/body_mesh.hpp"
 #include "families/rigid/body_shape.hpp"
 #include "families/rigid/body_solid.hpp"
@@ -2238,4 +2239,47 @@ TEST(AllMaterials, RagdollInClothHeldByTheHammockOverAPoolWithAFloatingCrate) {
   }
   EXPECT_GT(shape_particles, 100u);
   EXPECT_EQ(coupled_state(scene, 30, 2), coupled_state(scene, 30, 1));
+}
+
+// The bodies' grid of the fluid-body passes (body_grid.hpp): for points all over and around a
+// scatter of balls of mixed sizes (and two far from the rest, which grow the cells), the
+// candidates of a point hold every ball that holds it, in ascending order, the same order as a
+// loop over all bodies with the ball test; a point outside every ball's box, or not finite, has
+// none of them. And it culls: over a grid of 100 balls, a point sees a few, not all.
+TEST(FluidBody, BodyGridCandidatesHoldEveryBallThatHoldsThePointInSceneOrder) {
+  std::vector<Vec3d> centres;
+  std::vector<double> reaches;
+  for (int k = 0; k < 100; ++k) {
+    centres.push_back({0.15 * (k % 10), 0.1 * std::sin(0.7 * k), 0.15 * (k / 10)});
+    reaches.push_back(0.05 + 0.04 * ((k * 37) % 10) / 10.0);
+  }
+  fluid_body::BodyGrid grid;
+  grid.build(centres, reaches);
+  std::size_t tested = 0, visited = 0, inside = 0;
+  for (int i = 0; i < 60; ++i)
+    for (int j = 0; j < 12; ++j)
+      for (int l = 0; l < 60; ++l) {
+        const Vec3d p{-0.2 + 0.029 * i, -0.25 + 0.043 * j, -0.2 + 0.029 * l};
+        const std::span<const std::uint32_t> c = grid.candidates(p);
+        EXPECT_TRUE(std::is_sorted(c.begin(), c.end()));
+        for (std::size_t k = 0; k < centres.size(); ++k) {
+          const Vec3d d = p - centres[k];
+          if (dot(d, d) >= reaches[k] * reaches[k]) continue;
+          ++inside;
+          EXPECT_TRUE(std::binary_search(c.begin(), c.end(), std::uint32_t(k))) << k << " at " << i << " " << j << " " << l;
+        }
+        ++tested, visited += c.size();
+      }
+  EXPECT_GT(inside, 1000u);
+  EXPECT_LT(double(visited) / double(tested), 5.0) << "the grid does not cull";
+  EXPECT_TRUE(grid.candidates({5, 5, 5}).empty());
+  EXPECT_TRUE(grid.candidates({std::nan(""), 0, 0}).empty());
+  // Two balls 1 km apart: the cells grow (no grid of 10^12 empty cells); both are still found.
+  const std::vector<Vec3d> far{{0, 0, 0}, {1000, 0, 0}};
+  const std::vector<double> small{0.1, 0.1};
+  grid.build(far, small);
+  EXPECT_EQ(std::vector<std::uint32_t>(grid.candidates({0.05, 0, 0}).begin(), grid.candidates({0.05, 0, 0}).end()),
+            std::vector<std::uint32_t>{0});
+  const std::span<const std::uint32_t> second = grid.candidates({999.95, 0.05, 0});
+  EXPECT_TRUE(std::find(second.begin(), second.end(), 1u) != second.end());
 }
