@@ -879,6 +879,23 @@ const BadCase kBadCases[] = {
 INSTANTIATE_TEST_SUITE_P(SceneLoader, BadScene, testing::ValuesIn(kBadCases),
                          [](const testing::TestParamInfo<BadCase>& info) { return std::string(info.param.label); });
 
+// A scene of more rigid bodies than the body contacts' pair lists are bounded for (4096: every
+// pair is kept and tested each substep) is refused at "rigid_bodies", naming the bound; 4096
+// small bodies load.
+TEST(SceneLoader, MoreThan4096RigidBodiesAreRefused) {
+  const auto scene_of = [](int bodies) {
+    std::string text = R"({"domain": {"min": [0, 0, 0], "max": [100, 1, 100]}, "rigid_bodies": [)";
+    for (int k = 0; k < bodies; ++k)
+      text += fmt::format(R"({}{{"name": "b{}", "position": [{}, 0.5, {}]}})", k == 0 ? "" : ",", k, 0.5 + k % 64, 0.5 + k / 64);
+    return text + "]}";
+  };
+  EXPECT_EQ(load(scene_of(4096)).rigid_bodies.size(), 4096u);
+  const std::optional<SceneError> e = load_error(scene_of(4097));
+  ASSERT_TRUE(e.has_value());
+  EXPECT_EQ(e->json_path(), "rigid_bodies");
+  EXPECT_NE(std::string(e->what()).find("4097 bodies; at most 4096"), std::string::npos) << e->what();
+}
+
 // ---- Parsing big documents ------------------------------------------------------------------
 
 // The parser builds the document nlohmann's own parser builds: every value type, escapes, nesting

@@ -23,6 +23,16 @@ void BodyGrid::build(std::span<const Vec3d> centres, std::span<const double> rea
     largest = std::max(largest, reaches[k]);
   }
   const Vec3d extent = hi - lo;
+  if (!std::isfinite(extent.x + extent.y + extent.z)) {
+    // A body is not finite (the run reports it): one cell, every body in it, nothing skipped.
+    lo_ = {0.0, 0.0, 0.0};
+    inverse_cell_ = 0.0;
+    dims_[0] = dims_[1] = dims_[2] = 1;
+    start_ = {0, std::uint32_t(centres.size())};
+    bodies_.resize(centres.size());
+    for (std::size_t k = 0; k < centres.size(); ++k) bodies_[k] = std::uint32_t(k);
+    return;
+  }
   // The cell: half the largest reach, grown until the cells number at most kCellsPerBody per body.
   const double max_cells = double(kCellsPerBody * centres.size());
   double cell = std::max(0.5 * largest, 1e-9);

@@ -153,6 +153,7 @@ void BodyContacts::solve_pair(Active& pair, RigidBody& a, RigidBody& b) {
       SurfacePenetration pen;
       if (!penetration(other_solid, in_other, c.radius, pen)) continue;
       const Vec3d m = rotate(other.q, pen.normal);  // out of the other body, world frame
+      if (!(dot(m, m) > 0.5)) continue;  // no direction (a mesh field's flat spot): no contact
       const Vec3d own_point = centre - c.radius * m, other_point = own_point + pen.depth * m;
       const Vec3d p_a = slot.of_a ? own_point : other_point, p_b = slot.of_a ? other_point : own_point;
       const Vec3d n = slot.of_a ? m : -m;

@@ -21,6 +21,10 @@ namespace {
 
 // Densest solid (osmium, 22.6 t/m^3) with room to spare, as for shapes.
 constexpr double kMaxDensity = 1e5;
+// The most bodies a scene may hold: the body contacts keep a list of every pair of bodies and
+// test it every substep (body_contacts.hpp), so memory and time grow with the square of the
+// count: 4096 bodies are 8.4M pairs, 67 MB, and about 10 ms a substep of broad phase.
+constexpr std::size_t kMaxRigidBodies = 4096;
 // The lightest body: below, its inverse mass and inertia leave the range a joint solve can mix
 // with ordinary bodies.
 constexpr double kMinBodyMass = 1e-9;
@@ -157,6 +161,10 @@ void check_body_obj_name(const SceneDef& scene, const RigidBodyDef& b, const std
 }
 
 void check_rigid_bodies(SceneDef& scene, const std::string& file) {
+  if (scene.rigid_bodies.size() > kMaxRigidBodies)
+    fail(file, "rigid_bodies",
+         fmt::format("{} bodies; at most {} (the contacts between bodies test every pair each substep)",
+                     scene.rigid_bodies.size(), kMaxRigidBodies));
   for (std::size_t k = 0; k < scene.rigid_bodies.size(); ++k) {
     RigidBodyDef& b = scene.rigid_bodies[k];
     const std::string path = element_path("rigid_bodies", k);

@@ -17,7 +17,8 @@
 // body is plastic.
 // Error row "shape_error": per cluster, the RMS distance of its members from its best rigid fit
 // (of its rest shape, plastic deformation included) on the final positions, relative to the
-// cluster's size: the RMS distance of its members' rest positions from their rest centre of mass,
+// cluster's size: the RMS distance of its members' rest positions from their rest centre of mass
+// when the cluster was built (a plastic cluster's size stays that of the scene's shape),
 //   e_c = sqrt(sum_k |x_k - g_k|^2 / n_c) / sqrt(sum_k |q_k|^2 / n_c)
 // (g_k the fit's goal, q_k the rest offset, n_c the members); mean and max over the clusters.
 #pragma once
