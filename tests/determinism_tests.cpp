@@ -221,6 +221,11 @@ TEST(Golden, PendulumsAfter120Frames) {
 TEST(Golden, RigidChainAfter120Frames) {
   expect_golden({"rigid_chain.json", 120, 0x8c183c0a86fa60bcull, 0x8c183c0a86fa60bcull, HashedState::Bodies});
 }
+// Contacts between bodies (issue 17): the stack of 10 boxes, fused by the native AVX-512 build,
+// unfused by the x86-64 build, the same bits (measured).
+TEST(Golden, StackAfter120Frames) {
+  expect_golden({"stack.json", 120, 0x853402b1ea59f006ull, 0x853402b1ea59f006ull, HashedState::Bodies});
+}
 
 // The golden values' premise: a build whose instruction set has FMA fuses its multiply-adds (else
 // it would compute the unfused values where the other builds of its machine class compute the

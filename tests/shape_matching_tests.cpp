@@ -10,17 +10,21 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
 #include <fmt/format.h>
 
 #include "seiche/checkpoint.hpp"
+#include "seiche/cloth_obj_exporter.hpp"
+#include "seiche/frame_exporter.hpp"
 #include "seiche/kernels/shape_matching.hpp"
 #include "seiche/output_files.hpp"
 #include "seiche/phase.hpp"
@@ -592,6 +596,51 @@ TEST(ShapeContacts, ShapeDroppedOnAClothIsHeldByIt) {
     if (phase_material(s.phase[i]) == Material::Shape) {
       EXPECT_LT(std::hypot(s.vx[i], s.vy[i], s.vz[i]), 0.1f);
     }
+}
+
+// A scene with a cloth and a shape: the cloth's OBJ holds the cloth's vertices, not the shape's
+// particles (the shape's particles come after the cloths' in the store, so the cloths' are not
+// its last ids). Every OBJ vertex is the store position of the cloth particle of that vertex's
+// id, and none lies above the sheet (the shape starts above it).
+TEST(ShapeContacts, ClothObjHoldsTheClothsVerticesWithAShapeInTheScene) {
+  const SceneDef scene = load_scene_text(R"({
+    "domain": {"min": [0, 0, 0], "max": [1, 1, 1]},
+    "cloths": [{"name": "sheet", "sheet": {"origin": [0.2, 0.5, 0.2], "size": [0.6, 0.6], "resolution": [7, 5],
+                "plane": "xz"}, "pins": [0, 6]}],
+    "shapes": [{"box": {"min": [0.45, 0.75, 0.45], "max": [0.55, 0.85, 0.55]}, "spacing": 0.05}]
+  })",
+                                         "cloth_and_shape.json");
+  Simulation sim(scene);
+  sim.step_frame();
+  const ParticleStore& s = sim.particles();
+  const auto exporter = make_cloth_obj_exporter(scene);
+  ASSERT_NE(exporter, nullptr);
+  const auto files = exporter->encode_frame(FrameView{s, scene, 1, sim.time(), {}});
+  ASSERT_EQ(files.size(), 1u);
+  std::vector<std::array<float, 3>> cloth;  // the cloth particles' positions in id order
+  std::vector<std::pair<std::int32_t, std::size_t>> by_id;
+  for (std::size_t k = 0; k < s.size(); ++k)
+    if (phase_material(s.phase[k]) == Material::Cloth) by_id.push_back({s.id[k], k});
+  std::sort(by_id.begin(), by_id.end());
+  for (const auto& [id, k] : by_id) cloth.push_back({s.x[k], s.y[k], s.z[k]});
+  ASSERT_EQ(cloth.size(), 35u);
+  const std::string text(files[0].bytes.begin(), files[0].bytes.end());
+  std::istringstream lines(text);
+  std::string line;
+  std::size_t v = 0;
+  while (std::getline(lines, line)) {
+    if (line.rfind("v ", 0) != 0) continue;
+    std::istringstream in(line.substr(2));
+    float x, y, z;
+    in >> x >> y >> z;
+    ASSERT_LT(v, cloth.size());
+    EXPECT_EQ(x, cloth[v][0]) << v;
+    EXPECT_EQ(y, cloth[v][1]) << v;
+    EXPECT_EQ(z, cloth[v][2]) << v;
+    EXPECT_LE(y, 0.5f) << v;
+    ++v;
+  }
+  EXPECT_EQ(v, cloth.size());
 }
 
 // Shapes touching shapes and cloth: the same bits on 1, 2 and 3 threads, and a checkpoint (the

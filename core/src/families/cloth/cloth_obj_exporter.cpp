@@ -1,5 +1,8 @@
 #include "seiche/cloth_obj_exporter.hpp"
 
+#include <algorithm>
+#include <stdexcept>
+
 #include "cloth_solver.hpp"
 #include "seiche/output_files.hpp"
 
@@ -7,8 +10,9 @@ namespace seiche {
 
 namespace {
 
-// The cloths' vertices are the last particles of the store, cloth after cloth in vertex order
-// (Simulation::create_particles); their ids follow from the store's size.
+// The cloths' vertices are one run of ids in the store, cloth after cloth in vertex order
+// (family_registry.cpp): the run starts at the smallest id of a cloth particle. Not the store's
+// last ids: shape particles come after the cloths.
 class ClothObjExporter final : public FrameExporter {
  public:
   explicit ClothObjExporter(const SceneDef& scene) {
@@ -21,6 +25,16 @@ class ClothObjExporter final : public FrameExporter {
 
   std::string name() const override { return "cloth obj"; }
 
+  static std::size_t first_cloth_id(const ParticleStore& s) {
+    std::size_t first = s.size();
+    for (std::size_t k = 0; k < s.size(); ++k) {
+      if (phase_material(s.phase[k]) == Material::Cloth) {
+        first = std::min(first, std::size_t(s.id[k]));
+      }
+    }
+    return first;
+  }
+
   std::vector<std::filesystem::path> files(int frame) const override {
     std::vector<std::filesystem::path> f;
     for (const std::string& n : names_) f.emplace_back(frame_file_name(n, frame, "obj"));
@@ -30,7 +44,8 @@ class ClothObjExporter final : public FrameExporter {
   std::vector<EncodedFile> encode_frame(const FrameView& frame) const override {
     const ParticleStore& s = frame.particles;
     const std::vector<std::uint32_t> index_of_id = s.index_of_id();
-    std::size_t id = s.size() - vertices_;
+    std::size_t id = first_cloth_id(s);
+    if (id + vertices_ > s.size()) throw std::logic_error("cloth obj: the store holds too few cloth vertices");
     std::vector<EncodedFile> out;
     std::vector<Vec3> positions;
     for (std::size_t c = 0; c < shapes_.size(); ++c) {

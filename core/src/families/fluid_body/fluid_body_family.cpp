@@ -74,10 +74,21 @@ void FluidBodyFamily::add_passes(std::vector<Pass>& passes) {
                     [this](const StepContext&) { separate(); }});
 }
 
+void FluidBodyFamily::build_grid(bool separation) {
+  const std::vector<RigidBody>& bodies = this->bodies();
+  centres_.resize(bodies.size());
+  reaches_.resize(bodies.size());
+  for (std::size_t k = 0; k < bodies.size(); ++k) {
+    centres_[k] = bodies[k].x;
+    reaches_[k] = separation ? boundaries_[k].extent + particle_radius_ : boundaries_[k].reach;
+  }
+  grid_.build(centres_, reaches_);
+}
+
 template <class Visit>
 void FluidBodyFamily::for_each_site(Vec3d p, Visit&& visit) const {
   const std::vector<RigidBody>& bodies = this->bodies();
-  for (std::size_t k = 0; k < bodies.size(); ++k) {
+  for (const std::uint32_t k : grid_.candidates(p)) {
     const RigidBody& b = bodies[k];
     const BodyBoundary& boundary = boundaries_[k];
     const Vec3d d = p - b.x;
@@ -98,6 +109,7 @@ void FluidBodyFamily::gather_boundary() {
   const float* py = store_.py.data();
   const float* pz = store_.pz.data();
   const std::vector<RigidBody>& bodies = this->bodies();
+  build_grid(false);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const auto& range) {
     for (std::size_t i = range.begin(); i != range.end(); ++i) {
       const Vec3d p{px[i], py[i], pz[i]};
@@ -139,6 +151,7 @@ void FluidBodyFamily::solve_density() {
   float* py = store_.py.data();
   float* pz = store_.pz.data();
   const float* lambda = store_.lambda.data();
+  build_grid(false);
   solve_and_move_bodies(fluid_.neighborhood().count(), bodies, [&](std::size_t i, BodyImpulses& impulses) {
     if (!(boundary_[i].w > 0.0f) || !(lambda[i] < 0.0f)) return;
     const double lambda_i = lambda[i];
@@ -171,10 +184,18 @@ void FluidBodyFamily::separate() {
   float* px = store_.px.data();
   float* py = store_.py.data();
   float* pz = store_.pz.data();
+  build_grid(true);
   solve_and_move_bodies(fluid_.neighborhood().count(), bodies, [&](std::size_t i, BodyImpulses& impulses) {
     Vec3d p{px[i], py[i], pz[i]};
     bool moved = false;
-    for (std::size_t k = 0; k < bodies.size(); ++k) {
+    // The bodies in ascending order, each tested at p as the earlier contacts left it: after a
+    // contact p has moved, so the candidates after k are looked up again at the new p.
+    for (std::uint32_t next = 0;;) {
+      const std::span<const std::uint32_t> candidates = grid_.candidates(p);
+      const auto found = std::lower_bound(candidates.begin(), candidates.end(), next);
+      if (found == candidates.end()) break;
+      const std::uint32_t k = *found;
+      next = k + 1;
       const RigidBody& b = bodies[k];
       const double reach = boundaries_[k].extent + particle_radius_;
       const Vec3d r = p - b.x;

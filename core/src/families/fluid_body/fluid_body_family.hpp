@@ -37,6 +37,7 @@
 #include <vector>
 
 #include "body_boundary.hpp"
+#include "body_grid.hpp"
 #include "shape_boundary.hpp"
 #include "families/fluid/fluid_family.hpp"
 #include "families/rigid/rigid_family.hpp"
@@ -66,6 +67,9 @@ class FluidBodyFamily final : public Family {
   /// in body k's frame).
   template <class Visit>
   void for_each_site(rigid::Vec3d p, Visit&& visit) const;
+  /// The bodies' grid at their poses now, for the density passes' reach (the boundary's) or the
+  /// separation's (the solid's extent + the particle's radius).
+  void build_grid(bool separation);
 
   ParticleStore& store_;
   FluidFamily& fluid_;
@@ -76,6 +80,9 @@ class FluidBodyFamily final : public Family {
   std::vector<kernels::Float4> boundary_;  // per fluid particle: (g_b,i, rho_b,i)
   std::vector<rigid::Vec3d> kept_;          // per fluid particle: p_i when g_b,i was taken
   double particle_radius_;
+  fluid_body::BodyGrid grid_;  // which bodies a particle may reach (body_grid.hpp)
+  std::vector<rigid::Vec3d> centres_;
+  std::vector<double> reaches_;
 };
 
 }  // namespace seiche

@@ -15,6 +15,11 @@ double angular_inverse_mass(const RigidBody& b, Vec3d n) {
   return dot(n, b.world_inverse_inertia(n));
 }
 
+double patch_inverse_mass(const RigidBody& b, Vec3d r, Vec3d t, Vec3d n) {
+  const double twist = dot(cross(r, t), n);
+  return b.inverse_mass + twist * twist * angular_inverse_mass(b, n);
+}
+
 void apply_positional_impulse(RigidBody& b, Vec3d r, Vec3d p) {
   if (b.fixed()) return;
   b.x += b.inverse_mass * p;

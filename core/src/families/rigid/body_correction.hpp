@@ -24,6 +24,10 @@ namespace seiche::rigid {
 double positional_inverse_mass(const RigidBody& b, Vec3d r, Vec3d n);
 /// w = n^T I^-1 n about unit axis n.
 double angular_inverse_mass(const RigidBody& b, Vec3d n);
+/// A face patch's inverse mass at lever r along unit t, on a surface of unit normal n: its
+/// translation and its turn about n only (the normals hold the tipping):
+/// 1/m + ((r x t).n)^2 n^T I^-1 n.
+double patch_inverse_mass(const RigidBody& b, Vec3d r, Vec3d t, Vec3d n);
 
 /// Moves body point r (world frame) by the impulse p: x += p / m, q turned by I^-1 (r x p).
 void apply_positional_impulse(RigidBody& b, Vec3d r, Vec3d p);

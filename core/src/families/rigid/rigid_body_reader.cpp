@@ -70,14 +70,15 @@ const KeyTable<RigidBodyDef>& rigid_body_keys() {
           .doc("initial angular velocity, world frame"),
       K("fixed", &RigidBodyDef::fixed).doc("the body never moves (infinite mass): an anchor for joints"),
       K("friction", &RigidBodyDef::friction, Range::at_least(0))
-          .doc("static Coulomb friction of its contacts with the domain's walls and the colliders: "
-               "sqrt(this x the surface's `friction`) is the coefficient; with cloth sqrt(this x the "
-               "cloth's `friction`), with shape particles this"),
+          .doc("static Coulomb friction of its contacts with the domain's walls, the colliders and the other "
+               "bodies: sqrt(this x the surface's or the other body's `friction`) is the coefficient; with cloth "
+               "sqrt(this x the cloth's `friction`), with shape particles this"),
       K("dynamic_friction", &RigidBodyDef::dynamic_friction, Range::at_least(0))
-          .doc("sliding friction of those contacts, mixed with the surface's `friction` the same way"),
+          .doc("sliding friction of those contacts, mixed the same way with the surface's `friction` (another "
+               "body's `dynamic_friction`)"),
       K("restitution", &RigidBodyDef::restitution, Range::closed(0, 1))
           .doc("the share of its normal speed a bounce keeps (0: no bounce; none below 2 g h, the "
-               "speed a substep of gravity gives)"),
+               "speed a substep of gravity gives); between two bodies the larger of their two"),
   };
   return keys;
 }

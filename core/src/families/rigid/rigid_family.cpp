@@ -122,6 +122,32 @@ std::vector<Joint> make_joints(const SceneDef& scene, const std::vector<RigidBod
   return joints;
 }
 
+// The pairs of bodies that do not touch each other: those a joint joins, and any two of one
+// articulation (bodies linked through joints between movable bodies: a chain, a ragdoll), as
+// Bullet's multibodies leave out self-collision by default. Bodies that share a pivot (a ragdoll's
+// arms on its shoulder) sweep into each other at it with any turn, and a contact there fights the
+// joints; a fixed body, like the world, links nothing (pendulums hung from one fixed bar collide).
+std::vector<std::pair<int, int>> contactless_pairs(const std::vector<Joint>& joints, const std::vector<RigidBody>& bodies) {
+  // Union-find of the articulations.
+  std::vector<int> root(bodies.size());
+  for (std::size_t k = 0; k < root.size(); ++k) root[k] = int(k);
+  const auto find = [&](int k) {
+    while (root[std::size_t(k)] != k) k = root[std::size_t(k)] = root[std::size_t(root[std::size_t(k)])];
+    return k;
+  };
+  std::vector<std::pair<int, int>> pairs;
+  for (const Joint& j : joints) {
+    pairs.push_back({j.body_a, j.body_b});
+    if (j.body_a < 0 || j.body_b < 0 || bodies[std::size_t(j.body_a)].fixed() || bodies[std::size_t(j.body_b)].fixed())
+      continue;
+    root[std::size_t(find(j.body_a))] = find(j.body_b);
+  }
+  for (std::size_t a = 0; a < bodies.size(); ++a)
+    for (std::size_t b = a + 1; b < bodies.size(); ++b)
+      if (find(int(a)) == find(int(b))) pairs.push_back({int(a), int(b)});
+  return pairs;
+}
+
 }  // namespace
 
 RigidFamily::RigidFamily(const SceneDef& scene, std::span<const std::shared_ptr<const MeshSdf>> mesh_fields)
@@ -132,6 +158,7 @@ RigidFamily::RigidFamily(const SceneDef& scene, std::span<const std::shared_ptr<
   bodies_ = make_bodies(scene, extent);
   joints_ = rigid::JointSolver(make_joints(scene, bodies_, extent), bodies_, scene.solver.joint_trees);
   contacts_ = rigid::WorldContacts(scene, h_, mesh_fields);
+  body_contacts_ = rigid::BodyContacts(scene, contactless_pairs(joints_.joints(), bodies_), h_);
   start_energy_ = energy();
 }
 
@@ -142,10 +169,16 @@ void RigidFamily::add_passes(std::vector<Pass>& passes) {
   passes.push_back({"body update", Stage::Update, pass_order::kBodyUpdate, true, [this](const StepContext&) {
                       update();
                     }});
-  passes.push_back({"body contacts", Stage::Iterate, pass_order::kBodyContacts, true,
-                    [this](const StepContext&) { contacts_.solve_positions(bodies_); }});
+  // With the world, then between bodies (which reads which bodies the world holds).
+  passes.push_back({"body contacts", Stage::Iterate, pass_order::kBodyContacts, true, [this](const StepContext&) {
+                      contacts_.solve_positions(bodies_);
+                      if (!body_contacts_.empty()) body_contacts_.solve_positions(bodies_, contacts_);
+                    }});
   passes.push_back({"body contact velocities", Stage::Update, pass_order::kBodyContactVelocities, true,
-                    [this](const StepContext&) { contacts_.solve_velocities(bodies_); }});
+                    [this](const StepContext&) {
+                      contacts_.solve_velocities(bodies_);
+                      if (!body_contacts_.empty()) body_contacts_.solve_velocities(bodies_);
+                    }});
   if (joints_.empty()) return;
   passes.push_back({"joints reset", Stage::BeginSubstep, pass_order::kJointReset, false,
                     [this](const StepContext&) { joints_.reset_multipliers(); }});
@@ -156,6 +189,7 @@ void RigidFamily::add_passes(std::vector<Pass>& passes) {
 void RigidFamily::predict() {
   joints_.begin_substep(bodies_);
   contacts_.begin_substep(bodies_);
+  if (!body_contacts_.empty()) body_contacts_.begin_substep(bodies_);
   for (RigidBody& b : bodies_) rigid::predict_body(b, gravity_, h_);
 }
 

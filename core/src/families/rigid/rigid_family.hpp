@@ -16,7 +16,9 @@
 // contacts with the static world (world_contacts.hpp): "body contacts" every iteration
 // (kBodyContacts, after the joints) and "body contact velocities" after the update
 // (kBodyContactVelocities: dynamic friction and restitution); their multipliers live within a
-// substep (reset in the predict pass), so are not state either.
+// substep (reset in the predict pass), so are not state either. Contacts between bodies
+// (body_contacts.hpp, where two bodies not on one joint can touch) run in the same two passes,
+// after those with the world (whose touches tell which bodies rest on it); no state either.
 // Error rows: "joint_drift" (each joint's positional error, JointSolver::error, relative to its
 // length), "joint_angle_error" (radians; hinge, fixed, slider and universal joints), "body_energy" (|E - E_0| / E_0, E the bodies' kinetic plus
 // gravitational energy, zero at the domain's lowest corner as for the particles).
@@ -28,6 +30,7 @@
 #include <span>
 #include <vector>
 
+#include "body_contacts.hpp"
 #include "joint.hpp"
 #include "loop/family.hpp"
 #include "rigid_body.hpp"
@@ -66,6 +69,7 @@ class RigidFamily final : public Family {
   std::vector<rigid::RigidBody> bodies_;
   rigid::JointSolver joints_;
   rigid::WorldContacts contacts_;  // with the domain's walls and the colliders
+  rigid::BodyContacts body_contacts_;  // between bodies
   rigid::Vec3d gravity_;
   rigid::Vec3d lowest_corner_;
   double h_;             // the substep (s), in double: frame_dt / substeps

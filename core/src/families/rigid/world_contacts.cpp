@@ -37,13 +37,6 @@ void apply_velocity_change(RigidBody& b, Vec3d r, Vec3d dv) {
   b.omega += b.world_inverse_inertia(cross(r, p));
 }
 
-// A face patch's inverse mass at lever r along unit t: its translation and its turn about the
-// surface normal n only (the normals hold the tipping): 1/m + ((r x t).n)^2 n^T I^-1 n.
-double patch_inverse_mass(const RigidBody& b, Vec3d r, Vec3d t, Vec3d n) {
-  const double twist = dot(cross(r, t), n);
-  return b.inverse_mass + twist * twist * angular_inverse_mass(b, n);
-}
-
 }  // namespace
 
 std::vector<ContactPoint> contact_points(const RigidBodyDef& def) {
@@ -254,6 +247,13 @@ void WorldContacts::solve_velocities(std::vector<RigidBody>& bodies) {
       }
     }
   }
+}
+
+void WorldContacts::touched(std::vector<char>& out) const {
+  const std::size_t bodies = materials_.size(), surfaces = std::size_t(surfaces_.count());
+  out.assign(bodies, 0);
+  for (std::size_t k = 0; k < bodies; ++k)
+    for (std::size_t s = 0; s < surfaces; ++s) out[k] = out[k] || pairs_[k * surfaces + s].lambda_n > 0.0;
 }
 
 bool WorldContacts::face_patch(std::size_t body, int surface, bool this_iteration, Patch& out) {

@@ -79,6 +79,8 @@ class WorldContacts {
   void solve_positions(std::vector<RigidBody>& bodies);
   /// After the velocity update: dynamic friction and restitution.
   void solve_velocities(std::vector<RigidBody>& bodies);
+  /// Per body: whether it has touched a surface in this substep so far (a normal multiplier > 0).
+  void touched(std::vector<char>& out) const;
 
  private:
   struct Material {

@@ -1,0 +1,34 @@
+// The contact of two boxes (face against face, face against edge or corner), by separating axes
+// and clipping, as in Box2D and ODE (Gottschalk's separating axes; Sutherland-Hodgman clipping):
+// box corners alone miss two boxes face on face when neither has a corner inside the other (a box
+// turned about the normal on an equal box: every corner sticks out).
+//   Reference face: of the 6 face axes u of both boxes (A_i, B_i, half sizes h_a, h_b), the one of
+//     least overlap o(u) = sum_i h_a,i |u.A_i| + sum_i h_b,i |u.B_i| - |(x_a - x_b).u| (ties: a's
+//     axes first, x before y before z); its box is the reference box R, its face towards the other
+//     box (outward normal f) the reference face, the other box the incident box I.
+//   Incident face: I's face whose outward normal is most against f; its 4 corners, clipped to the
+//     reference face's side planes |(p - x_R).R_j| <= h_R,j (1 + 1e-9) (j the face's two other axes;
+//     the slack keeps an edge that lies on a side, as equal stacked boxes have): up to 8 points p.
+//   Contacts: each p below the reference face's plane, depth d = (x_R + h_R,i f - p).f > 0; I's
+//     point p, R's point p + d f, and the normal n = f turned to point at a (f where R is b).
+// Edge against edge (two boxes crossed, neither face axis separating them least) gives no
+// contact: the 9 edge-edge axes are not tested (a known limit).
+#pragma once
+
+#include "rigid_body.hpp"
+
+namespace seiche::rigid {
+
+struct BoxBoxContact {
+  Vec3d point_a, point_b;  ///< world frame
+  Vec3d normal;            ///< unit, the way a is pushed
+  double depth = 0.0;      ///< > 0 (m)
+};
+
+inline constexpr int kMaxBoxBoxContacts = 8;
+
+/// The contacts of box a (half sizes half_a, body frame) and box b; returns how many (0 to 8).
+int box_box_contacts(const RigidBody& a, Vec3d half_a, const RigidBody& b, Vec3d half_b,
+                     BoxBoxContact (&out)[kMaxBoxBoxContacts]);
+
+}  // namespace seiche::rigid
