@@ -839,6 +839,38 @@ TEST(ParticleContacts, FrictionRemovesRelativeSlidingAndCoincidentStaysFinite) {
   EXPECT_EQ(q.py[0], q.py[1]);
 }
 
+// Fluid-shape contacts (solve_sided_contacts): a fluid particle (w 1) overlapping two shape
+// particles (w 2) by 0.04 each, along x and along y: its corrections are averaged over its two
+// contacts, lambda = 0.04 / (1 + 2) / 2 each, and each shape particle gets its pair's whole
+// reaction, so the momentum sum of m dp is 0; a pair out of reach does nothing.
+TEST(ParticleContacts, SidedContactsKeepEveryPairsMomentum) {
+  Particles p(4);
+  p.set(0, 0, 0, 0), p.set(1, 0.06, 0, 0), p.set(2, 0, 0.06, 0), p.set(3, 0, 0, 0.2);
+  p.w[0] = 1.0f, p.w[1] = 2.0f, p.w[2] = 2.0f, p.w[3] = 2.0f;
+  SidedContacts c;
+  c.clear();
+  c.first.particle = {0};
+  c.first.partner = {1, 2, 3};
+  c.first.distance = {0.1f, 0.1f, 0.1f};
+  c.first.start = {0, 3};
+  c.second = {1, 2, 3};
+  c.second_entry = {0, 1, 2};
+  c.second_start = {0, 1, 2, 3};
+  std::vector<float> scratch;
+  solve_sided_contacts(p.view(), c, scratch);
+  const double lambda = 0.04 / 3.0 / 2.0;
+  EXPECT_NEAR(p.px[0], -1.0 * lambda, 1e-7);
+  EXPECT_NEAR(p.py[0], -1.0 * lambda, 1e-7);
+  EXPECT_NEAR(p.px[1], 0.06 + 2.0 * lambda, 1e-7);
+  EXPECT_NEAR(p.py[2], 0.06 + 2.0 * lambda, 1e-7);
+  EXPECT_EQ(p.pz[3], 0.2f);  // out of reach
+  for (int a = 0; a < 2; ++a) {
+    const float* x = a == 0 ? p.px.data() : p.py.data();
+    const double momentum = (x[0] - 0.0) / 1.0 + (x[1] - (a == 0 ? 0.06 : 0.0)) / 2.0 + (x[2] - (a == 0 ? 0.0 : 0.06)) / 2.0;
+    EXPECT_NEAR(momentum, 0.0, 1e-8) << "axis " << a;
+  }
+}
+
 TEST(ParticleContacts, ThreadCountDoesNotChangeResults) {
   // A random cloud of 3000 particles with many overlaps, friction on, three iterations.
   std::mt19937 rng(9);

@@ -74,4 +74,72 @@ void solve_particle_contacts(const ParticleView& p, const ParticleContacts& c, f
   });
 }
 
+// The momentum-keeping contacts (particle_contacts.hpp, solve_sided_contacts): pass 1 per
+// particle i, its pairs' impulses lambda n (averaged over its active contacts) and its own
+// correction; pass 2 per partner j, the sum of its entries' reactions in its list's order;
+// pass 3 applies both. Reads before writes: no result depends on the thread count.
+void solve_sided_contacts(const ParticleView& p, const SidedContacts& c, std::vector<float>& scratch) {
+  const ParticleContacts& f = c.first;
+  const std::size_t groups = f.size(), entries = f.partner.size(), partners = c.second.size();
+  if (groups == 0) return;
+  scratch.resize(3 * (entries + groups + partners));
+  float* impulse = scratch.data();                  // per entry
+  float* dp_first = impulse + 3 * entries;          // per group
+  float* dp_second = dp_first + 3 * groups;         // per partner
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, groups, 512), [&](const auto& r) {
+    for (std::size_t g = r.begin(); g != r.end(); ++g) {
+      const std::uint32_t i = f.particle[g];
+      const float wi = p.w[i];
+      const float xi = p.px[i], yi = p.py[i], zi = p.pz[i];
+      int active = 0;
+      for (std::uint32_t k = f.start[g]; k < f.start[g + 1]; ++k) {
+        float* e = impulse + 3 * std::size_t(k);
+        e[0] = e[1] = e[2] = 0.0f;
+        const std::uint32_t j = f.partner[k];
+        const float dx = xi - p.px[j], dy = yi - p.py[j], dz = zi - p.pz[j];
+        const float d2 = dx * dx + dy * dy + dz * dz;
+        const float rest = f.distance[k];
+        const float w_sum = wi + p.w[j];
+        if (!(d2 < rest * rest) || !(w_sum > 0.0f)) continue;  // apart (or NaN), or both fixed
+        const float d = std::sqrt(d2);
+        if (d < 1e-9f) continue;  // coincident: no normal
+        const float lambda = (rest - d) / (w_sum * d);  // times (dx, dy, dz) = d n
+        e[0] = lambda * dx, e[1] = lambda * dy, e[2] = lambda * dz;
+        ++active;
+      }
+      const float inv = active > 0 ? 1.0f / float(active) : 0.0f;
+      float sx = 0.0f, sy = 0.0f, sz = 0.0f;
+      for (std::uint32_t k = f.start[g]; k < f.start[g + 1]; ++k) {
+        float* e = impulse + 3 * std::size_t(k);
+        e[0] *= inv, e[1] *= inv, e[2] *= inv;
+        sx += e[0], sy += e[1], sz += e[2];
+      }
+      dp_first[3 * g] = wi * sx, dp_first[3 * g + 1] = wi * sy, dp_first[3 * g + 2] = wi * sz;
+    }
+  });
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, partners, 512), [&](const auto& r) {
+    for (std::size_t b = r.begin(); b != r.end(); ++b) {
+      float sx = 0.0f, sy = 0.0f, sz = 0.0f;
+      for (std::uint32_t k = c.second_start[b]; k < c.second_start[b + 1]; ++k) {
+        const float* e = impulse + 3 * std::size_t(c.second_entry[k]);
+        sx += e[0], sy += e[1], sz += e[2];
+      }
+      const float wj = p.w[c.second[b]];
+      dp_second[3 * b] = -wj * sx, dp_second[3 * b + 1] = -wj * sy, dp_second[3 * b + 2] = -wj * sz;
+    }
+  });
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, groups, 2048), [&](const auto& r) {
+    for (std::size_t g = r.begin(); g != r.end(); ++g) {
+      const std::uint32_t i = f.particle[g];
+      p.px[i] += dp_first[3 * g], p.py[i] += dp_first[3 * g + 1], p.pz[i] += dp_first[3 * g + 2];
+    }
+  });
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, partners, 2048), [&](const auto& r) {
+    for (std::size_t b = r.begin(); b != r.end(); ++b) {
+      const std::uint32_t j = c.second[b];
+      p.px[j] += dp_second[3 * b], p.py[j] += dp_second[3 * b + 1], p.pz[j] += dp_second[3 * b + 2];
+    }
+  });
+}
+
 }  // namespace seiche::kernels

@@ -45,6 +45,7 @@ inline constexpr int kBodyPredict = 10;      //   rigid bodies: their own state,
 inline constexpr int kFluidNeighbors = 0;    // Neighbors: reorders the store, so it comes first
 inline constexpr int kContactPairs = 10;     //   reads the fluid's grid of this substep
 inline constexpr int kParticleBodyPairs = 20;  // on the bodies' predicted poses
+inline constexpr int kFluidShapePairs = 30;  //   fluid-shape pairs of the density, in the fluid's grid
 inline constexpr int kDistanceReset = 0;     // BeginSubstep
 inline constexpr int kClothReset = 10;
 inline constexpr int kJointReset = 20;

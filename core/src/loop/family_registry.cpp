@@ -99,12 +99,14 @@ void build_particle_body_contacts(FamilyBuild& b) {
   b.add(std::make_unique<ParticleBodyContacts>(b.scene, b.store, rigid->bodies()));
 }
 
-// Bodies in fluid: their boundary particles in the fluid's density (only with both sections).
+// Bodies and shapes in fluid: their boundary particles in the fluid's density (only with fluid
+// and bodies or shapes).
 void build_fluid_body(FamilyBuild& b) {
   FluidFamily* fluid = b.find<FluidFamily>();
   RigidFamily* rigid = b.find<RigidFamily>();
-  if (fluid == nullptr || rigid == nullptr) return;
-  b.add(std::make_unique<FluidBodyFamily>(b.scene, b.store, *fluid, *rigid));
+  const ShapeFamily* shapes = b.find<ShapeFamily>();
+  if (fluid == nullptr || (rigid == nullptr && shapes == nullptr)) return;
+  b.add(std::make_unique<FluidBodyFamily>(b.scene, b.store, *fluid, rigid, shapes ? shapes->first_id() : 0));
 }
 
 constexpr FamilyRow kRows[] = {

@@ -11,7 +11,7 @@
 namespace seiche {
 
 bool ParticleContactStage::shapes_touch(const SceneDef& scene) {
-  return scene.shapes.size() > 1 || (!scene.shapes.empty() && !scene.cloths.empty());
+  return scene.shapes.size() > 1 || (!scene.shapes.empty() && (!scene.cloths.empty() || !scene.fluids.empty()));
 }
 
 bool ParticleContactStage::needed(const SceneDef& scene) {
@@ -32,6 +32,10 @@ ParticleContactStage::ParticleContactStage(const ClothSolver* cloth, const Scene
   if (with_shapes_)
     for (const ShapeDef& shape : scene.shapes) max_distance_ = std::max(max_distance_, shape.spacing);
   shape_count_ = with_shapes_ ? scene.shapes.size() : 0;
+  // Shapes and fluid: a shape particle near the fluid's box goes into the grid too.
+  if (with_shapes_ && fluid_radius > 0.0f)
+    for (const ShapeDef& shape : scene.shapes)
+      fluid_reach_ = std::max(fluid_reach_, kCandidateMargin * (0.5f * shape.spacing + fluid_radius));
   for (int a = 0; a < 3; ++a) domain_min_[a] = scene.domain.min[a], domain_max_[a] = scene.domain.max[a];
 }
 
@@ -102,10 +106,12 @@ void ParticleContactStage::visit_candidates(const ParticleStore& store, const Ne
     else
       scan(std::false_type{});
   }
-  if (!i_cloth || !fluid || fluid->count() == 0) return;
+  if (!fluid || fluid->count() == 0 || (!i_cloth && fluid_reach_ == 0.0f)) return;
 
-  // Fluid partners: the cells of the fluid grid within `cells` cells of p_i's cell.
-  const float r = 0.5f * ti + fluid_radius_;
+  // Fluid partners: the cells of the fluid grid within `cells` cells of p_i's cell. Contact
+  // distance: a cloth particle's half thickness or a shape particle's radius (half its spacing),
+  // plus the fluid particle's radius.
+  const float r = (i_cloth ? 0.5f * ti : store.radius[i]) + fluid_radius_;
   const float reach = kCandidateMargin * r;
   const neighbor::CellGrid& grid = fluid->grid;
   const int cells = int(std::ceil(reach / grid.spec().cell_size));
@@ -137,6 +143,7 @@ void ParticleContactStage::find_candidates(const ParticleStore& store, const Nei
     if (in) grid_particles_.push_back(std::uint32_t(i));
   }
   contacts_.clear();
+  fluid_shape_.clear();
   if (grid_particles_.empty()) return;  // shapes far apart, no cloth: nothing to touch
   // The grid spans its particles' box (clamped to the domain grown by a cell: particles outside
   // share the border cells), with cells of twice the largest candidate distance (a query scans
@@ -183,24 +190,35 @@ void ParticleContactStage::find_candidates(const ParticleStore& store, const Nei
   });
 
   // The contact list: grid particles with candidates, then the fluid particles they touch,
-  // each fluid particle's cloth partners in cloth order (a transpose of the cloth lists).
+  // each fluid particle's cloth partners in cloth order (a transpose of the cloth lists). A shape
+  // particle's fluid partners go to the momentum-keeping list instead (fluid_shape_).
   struct FluidPair {
     std::uint32_t fluid, cloth;
     float distance;
   };
   std::vector<FluidPair> fluid_pairs;
+  std::vector<FluidShapePair> shape_pairs;
   for (std::size_t g = 0; g < m; ++g) {
     if (count[g] == 0) continue;
     const std::uint32_t i = grid_particles_[g];
-    contacts_.particle.push_back(i);
+    const bool i_shape = phase_material(store.phase[i]) == Material::Shape;
+    const std::size_t entries_before = contacts_.partner.size();
     for (std::size_t e = g * kMaxCandidates; e < g * kMaxCandidates + count[g]; ++e) {
       const std::uint32_t j = slot_partner_[e];
+      const bool j_fluid = phase_material(store.phase[j]) == Material::Fluid;
+      if (i_shape && j_fluid) {
+        shape_pairs.push_back({i, j, slot_distance_[e]});
+        continue;
+      }
       contacts_.partner.push_back(j);
       contacts_.distance.push_back(slot_distance_[e]);
-      if (phase_material(store.phase[j]) == Material::Fluid) fluid_pairs.push_back({j, i, slot_distance_[e]});
+      if (j_fluid) fluid_pairs.push_back({j, i, slot_distance_[e]});
     }
+    if (contacts_.partner.size() == entries_before) continue;  // only fluid partners
+    contacts_.particle.push_back(i);
     contacts_.start.push_back(std::uint32_t(contacts_.partner.size()));
   }
+  if (!shape_pairs.empty()) build_fluid_shape_contacts(shape_pairs);
   std::stable_sort(fluid_pairs.begin(), fluid_pairs.end(),
                    [](const FluidPair& a, const FluidPair& b) { return a.fluid < b.fluid; });
   for (std::size_t e = 0; e < fluid_pairs.size(); ++e) {
@@ -214,14 +232,44 @@ void ParticleContactStage::find_candidates(const ParticleStore& store, const Nei
   if (!fluid_pairs.empty()) contacts_.start.push_back(std::uint32_t(contacts_.partner.size()));
 }
 
+// The fluid-shape contacts from their pairs in shape order (each shape particle's fluid partners
+// in the fluid grid's order): fluid-major by a stable sort, and each shape particle's entries.
+void ParticleContactStage::build_fluid_shape_contacts(std::vector<FluidShapePair>& pairs) {
+  std::vector<std::uint32_t> entry_of(pairs.size());  // pair (shape order) -> entry (fluid order)
+  std::vector<std::uint32_t> order(pairs.size());
+  for (std::size_t e = 0; e < pairs.size(); ++e) order[e] = std::uint32_t(e);
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::uint32_t a, std::uint32_t b) { return pairs[a].fluid < pairs[b].fluid; });
+  kernels::ParticleContacts& f = fluid_shape_.first;
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    const FluidShapePair& pair = pairs[order[k]];
+    if (k > 0 && pair.fluid != pairs[order[k - 1]].fluid) f.start.push_back(std::uint32_t(f.partner.size()));
+    if (k == 0 || pair.fluid != pairs[order[k - 1]].fluid) f.particle.push_back(pair.fluid);
+    entry_of[order[k]] = std::uint32_t(f.partner.size());
+    f.partner.push_back(pair.shape);
+    f.distance.push_back(pair.distance);
+  }
+  f.start.push_back(std::uint32_t(f.partner.size()));
+  for (std::size_t e = 0; e < pairs.size(); ++e) {
+    if (e > 0 && pairs[e].shape != pairs[e - 1].shape)
+      fluid_shape_.second_start.push_back(std::uint32_t(fluid_shape_.second_entry.size()));
+    if (e == 0 || pairs[e].shape != pairs[e - 1].shape) fluid_shape_.second.push_back(pairs[e].shape);
+    fluid_shape_.second_entry.push_back(entry_of[e]);
+  }
+  fluid_shape_.second_start.push_back(std::uint32_t(fluid_shape_.second_entry.size()));
+}
+
 // The boxes of the shapes (one each) and of all the cloth (the last), around their predicted
 // positions, grown by the largest candidate distance; per shape, the other boxes its own meets.
 void ParticleContactStage::find_shape_partner_boxes(const ParticleStore& store) {
   boxes_.assign(shape_count_ + 1, Box{});
+  Box fluid_box;
   for (std::size_t i = 0; i < store.size(); ++i) {
     const Material m = phase_material(store.phase[i]);
-    if (m != Material::Cloth && m != Material::Shape) continue;
-    Box& box = boxes_[m == Material::Cloth ? shape_count_ : std::size_t(store.phase[i] >> 8)];
+    if (m == Material::Fluid && fluid_reach_ == 0.0f) continue;
+    if (m != Material::Cloth && m != Material::Shape && m != Material::Fluid) continue;
+    Box& box = m == Material::Fluid ? fluid_box
+                                    : boxes_[m == Material::Cloth ? shape_count_ : std::size_t(store.phase[i] >> 8)];
     const float p[3] = {store.px[i], store.py[i], store.pz[i]};
     for (int a = 0; a < 3; ++a) box.lo[a] = std::min(box.lo[a], p[a]), box.hi[a] = std::max(box.hi[a], p[a]);
   }
@@ -239,6 +287,13 @@ void ParticleContactStage::find_shape_partner_boxes(const ParticleStore& store) 
     for (std::size_t k = 0; k < boxes_.size(); ++k)
       if (k != c && meet(boxes_[c], boxes_[k])) partner_boxes_[c].push_back(std::uint32_t(k));
   }
+  // The fluid's box, grown by the largest fluid-shape candidate distance, last: every shape's
+  // partner (a shape particle inside it looks for fluid partners).
+  if (fluid_reach_ > 0.0f) {
+    for (int a = 0; a < 3; ++a) fluid_box.lo[a] -= fluid_reach_, fluid_box.hi[a] += fluid_reach_;
+    boxes_.push_back(fluid_box);
+    for (std::size_t c = 0; c < shape_count_; ++c) partner_boxes_[c].push_back(std::uint32_t(boxes_.size() - 1));
+  }
 }
 
 // Whether shape particle i lies in the grown box of another shape or of the cloth: a particle
@@ -255,8 +310,8 @@ bool ParticleContactStage::near_a_partner(const ParticleStore& store, std::size_
 }
 
 void ParticleContactStage::solve(const kernels::ParticleView& p) {
-  if (contacts_.size() == 0) return;  // nothing within reach this substep
-  kernels::solve_particle_contacts(p, contacts_, friction_, scratch_);
+  if (contacts_.size() != 0) kernels::solve_particle_contacts(p, contacts_, friction_, scratch_);
+  if (fluid_shape_.first.size() != 0) kernels::solve_sided_contacts(p, fluid_shape_, scratch_);
 }
 
 }  // namespace seiche

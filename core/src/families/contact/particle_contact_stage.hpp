@@ -10,8 +10,15 @@
 //                              of each shape's spacing); a shape's own particles never touch
 //   shape-cloth                always; contact distance = half the shape's spacing + half the
 //                              cloth's thickness
-// Cloth particles, and shape particles within reach of another shape's or a cloth's box, go into
-// a grid of their own (the store is not reordered for it);
+//   shape-fluid                when the scene has fluid; contact distance = half the shape's
+//                              spacing + the fluid particle radius; solved apart, keeping each
+//                              pair's momentum (kernels::solve_sided_contacts: the fluid particle's
+//                              corrections averaged, the shape particle gets the sum of their
+//                              reactions, which shape matching spreads over its cluster), without
+//                              friction. The fluid's density sees shapes as its boundary too
+//                              (fluid_body/shape_boundary.hpp); these contacts keep it out of them.
+// Cloth particles, and shape particles within reach of another shape's, a cloth's or the fluid's
+// box, go into a grid of their own (the store is not reordered for it);
 // fluid partners are found in the fluid's neighbor grid. A pair is a candidate when closer than
 // kCandidateMargin times its contact distance, so contacts that close during the iterations
 // are not missed. Lists are in a fixed order: results do not depend on the thread count.
@@ -42,7 +49,7 @@ class ParticleContactStage {
   /// Whether a scene needs this stage: a cloth with self_collision, two cloths, cloth and fluid,
   /// or shapes that touch (shapes_touch).
   static bool needed(const SceneDef& scene);
-  /// Whether shape particles take part: two shapes or more, or a shape and a cloth.
+  /// Whether shape particles take part: two shapes or more, or a shape and a cloth or fluid.
   static bool shapes_touch(const SceneDef& scene);
 
   /// `cloth`: the scene's cloths, or null without cloth; fluid_radius: collision radius of
@@ -57,6 +64,11 @@ class ParticleContactStage {
  private:
   void find_shape_partner_boxes(const ParticleStore& store);
   bool near_a_partner(const ParticleStore& store, std::size_t i) const;
+  struct FluidShapePair {
+    std::uint32_t shape, fluid;
+    float distance;
+  };
+  void build_fluid_shape_contacts(std::vector<FluidShapePair>& shape_ordered_pairs);
   template <class Visit>
   void visit_candidates(const ParticleStore& store, const Neighborhood* fluid, std::uint32_t i, Visit&& visit) const;
 
@@ -64,15 +76,17 @@ class ParticleContactStage {
   float fluid_radius_ = 0.0f;
   bool with_shapes_ = false;  // shape particles are in the grid (shapes_touch)
   std::size_t shape_count_ = 0;  // with shapes: the scene's shapes
-  // With shapes, per substep: a box per shape and one for all the cloth (the last), around their
-  // particles grown by the largest candidate distance; per shape, the other boxes that meet its
-  // own. Only a shape particle inside one of those goes into the grid (near_a_partner).
+  // With shapes, per substep: a box per shape and one for all the cloth, around their particles
+  // grown by the largest candidate distance; per shape, the other boxes that meet its own; with
+  // fluid, last, the fluid's box grown by fluid_reach_ (every shape's partner). Only a shape
+  // particle inside one of those goes into the grid (near_a_partner).
   struct Box {
     float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
   };
   std::vector<Box> boxes_;
   std::vector<std::vector<std::uint32_t>> partner_boxes_;
   float max_distance_ = 0.0f;  // largest contact distance between grid particles
+  float fluid_reach_ = 0.0f;   // with shapes and fluid: the largest fluid-shape candidate distance
   float friction_ = 0.0f;
   float domain_min_[3] = {0, 0, 0}, domain_max_[3] = {0, 0, 0};
   neighbor::CellGrid grid_;
@@ -84,6 +98,7 @@ class ParticleContactStage {
   std::vector<std::uint32_t> count_, slot_partner_;  // per grid particle: kMaxCandidates slots
   std::vector<float> slot_distance_;
   kernels::ParticleContacts contacts_;
+  kernels::SidedContacts fluid_shape_;  // fluid particles (first) against shape particles
   std::vector<float> scratch_;
 };
 

@@ -50,26 +50,32 @@ void solve_and_move_bodies(std::size_t n, std::vector<RigidBody>& bodies, PerPar
 
 }  // namespace
 
-FluidBodyFamily::FluidBodyFamily(const SceneDef& scene, ParticleStore& store, FluidFamily& fluid, RigidFamily& rigid)
+FluidBodyFamily::FluidBodyFamily(const SceneDef& scene, ParticleStore& store, FluidFamily& fluid, RigidFamily* rigid,
+                                 std::int32_t first_shape_id)
     : store_(store), fluid_(fluid), rigid_(rigid) {
   particle_radius_ = fluid.solver().particle_radius();
   const double spacing = scene.fluids[0].spacing;
   const double h = fluid.solver().kernel_radius();
   for (std::size_t k = 0; k < scene.rigid_bodies.size(); ++k)
     boundaries_.push_back(fluid_body::sample_body_boundary(scene.rigid_bodies[k], k, spacing, h));
+  if (!scene.shapes.empty()) shapes_ = std::make_unique<fluid_body::ShapeBoundary>(scene, first_shape_id, h);
 }
 
 void FluidBodyFamily::add_passes(std::vector<Pass>& passes) {
+  if (shapes_)
+    passes.push_back({"fluid-shape pairs", Stage::Neighbors, pass_order::kFluidShapePairs, true,
+                      [this](const StepContext&) { shapes_->find_pairs(store_, fluid_.neighborhood()); }});
   passes.push_back({"fluid-body boundary", Stage::Iterate, pass_order::kFluidBodyBoundary, true,
                     [this](const StepContext&) { gather_boundary(); }});
   passes.push_back({"fluid-body density", Stage::Iterate, pass_order::kFluidBodyDensity, true,
                     [this](const StepContext&) { solve_density(); }});
+  if (rigid_ == nullptr) return;  // shapes only: their contacts with the fluid are particle contacts
   passes.push_back({"fluid-body separation", Stage::Iterate, pass_order::kFluidBodySeparation, true,
                     [this](const StepContext&) { separate(); }});
 }
 
 void FluidBodyFamily::build_grid(bool separation) {
-  const std::vector<RigidBody>& bodies = rigid_.bodies();
+  const std::vector<RigidBody>& bodies = this->bodies();
   centres_.resize(bodies.size());
   reaches_.resize(bodies.size());
   for (std::size_t k = 0; k < bodies.size(); ++k) {
@@ -81,7 +87,7 @@ void FluidBodyFamily::build_grid(bool separation) {
 
 template <class Visit>
 void FluidBodyFamily::for_each_site(Vec3d p, Visit&& visit) const {
-  const std::vector<RigidBody>& bodies = rigid_.bodies();
+  const std::vector<RigidBody>& bodies = this->bodies();
   for (const std::uint32_t k : grid_.candidates(p)) {
     const RigidBody& b = bodies[k];
     const BodyBoundary& boundary = boundaries_[k];
@@ -102,7 +108,7 @@ void FluidBodyFamily::gather_boundary() {
   const float* px = store_.px.data();
   const float* py = store_.py.data();
   const float* pz = store_.pz.data();
-  const std::vector<RigidBody>& bodies = rigid_.bodies();
+  const std::vector<RigidBody>& bodies = this->bodies();
   build_grid(false);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const auto& range) {
     for (std::size_t i = range.begin(); i != range.end(); ++i) {
@@ -123,6 +129,11 @@ void FluidBodyFamily::gather_boundary() {
         local += (psi * double(kernel.spiky_grad_over_r(r2))) * r;
       });
       flush();
+      if (shapes_) {
+        double g[3] = {gradient.x, gradient.y, gradient.z};
+        shapes_->gather(store_, i, rho0, kernel, density, g);
+        gradient = {g[0], g[1], g[2]};
+      }
       boundary_[i] = {float(gradient.x), float(gradient.y), float(gradient.z), float(density)};
     }
   });
@@ -133,7 +144,9 @@ void FluidBodyFamily::solve_density() {
   const kernels::PbfParams& prm = fluid_.solver().params();
   const kernels::SphKernel kernel(prm.h);
   const double mass = prm.mass;
-  std::vector<RigidBody>& bodies = rigid_.bodies();
+  if (shapes_) shapes_->solve(store_, fluid_.neighborhood().count(), mass);
+  if (rigid_ == nullptr) return;
+  std::vector<RigidBody>& bodies = rigid_->bodies();
   float* px = store_.px.data();
   float* py = store_.py.data();
   float* pz = store_.pz.data();
@@ -167,7 +180,7 @@ void FluidBodyFamily::solve_density() {
 
 void FluidBodyFamily::separate() {
   const double inverse_mass = 1.0 / double(fluid_.solver().particle_mass());
-  std::vector<RigidBody>& bodies = rigid_.bodies();
+  std::vector<RigidBody>& bodies = rigid_->bodies();
   float* px = store_.px.data();
   float* py = store_.py.data();
   float* pz = store_.pz.data();

@@ -1,7 +1,9 @@
-// Two-way coupling of the rigid bodies with the fluid (docs/design.md, "Fluid and rigid bodies"):
-// each body's boundary particles (body_boundary.hpp) take part in the fluid's density
-// constraint, and a separation keeps every fluid particle out of every body's solid; what either
-// does to a fluid particle it does, reversed, to the body.
+// Two-way coupling of the rigid bodies and the shape-matched particle bodies with the fluid
+// (docs/design.md, "Fluid and rigid bodies", "Fluid and shapes"): each body's boundary particles
+// (body_boundary.hpp) and every shape particle (shape_boundary.hpp) take part in the fluid's
+// density constraint, and a separation keeps every fluid particle out of every body's solid; what
+// either does to a fluid particle it does, reversed, to the body or the shape particle. (Fluid
+// and shape particles are kept apart by the particle contact stage, particle_contact_stage.hpp.)
 //
 // Where the boundary particles live: in this family, in each body's frame, not in the particle
 // store. They move only with their body, so their body-frame positions, volumes and grid are
@@ -31,10 +33,12 @@
 // thread count.
 #pragma once
 
+#include <memory>
 #include <vector>
 
 #include "body_boundary.hpp"
 #include "body_grid.hpp"
+#include "shape_boundary.hpp"
 #include "families/fluid/fluid_family.hpp"
 #include "families/rigid/rigid_family.hpp"
 #include "loop/family.hpp"
@@ -45,13 +49,17 @@ namespace seiche {
 
 class FluidBodyFamily final : public Family {
  public:
-  FluidBodyFamily(const SceneDef& scene, ParticleStore& store, FluidFamily& fluid, RigidFamily& rigid);
+  /// `rigid`: the bodies, or null without; `first_shape_id`: the id of the first shape particle
+  /// (ignored without shapes). Built where the scene has fluid and bodies or shapes.
+  FluidBodyFamily(const SceneDef& scene, ParticleStore& store, FluidFamily& fluid, RigidFamily* rigid,
+                  std::int32_t first_shape_id);
 
   void add_passes(std::vector<Pass>& passes) override;
 
   const std::vector<fluid_body::BodyBoundary>& boundaries() const { return boundaries_; }
 
  private:
+  const std::vector<rigid::RigidBody>& bodies() const { return rigid_ ? rigid_->bodies() : no_bodies_; }
   void gather_boundary();
   void solve_density();
   void separate();
@@ -65,7 +73,9 @@ class FluidBodyFamily final : public Family {
 
   ParticleStore& store_;
   FluidFamily& fluid_;
-  RigidFamily& rigid_;
+  RigidFamily* rigid_;  // null without bodies
+  std::vector<rigid::RigidBody> no_bodies_;
+  std::unique_ptr<fluid_body::ShapeBoundary> shapes_;  // null without shapes
   std::vector<fluid_body::BodyBoundary> boundaries_;  // per body, scene order
   std::vector<kernels::Float4> boundary_;  // per fluid particle: (g_b,i, rho_b,i)
   std::vector<rigid::Vec3d> kept_;          // per fluid particle: p_i when g_b,i was taken

@@ -55,7 +55,8 @@ std::size_t ShapeFamily::particle_count(const SceneDef& scene) {
   return count;
 }
 
-ShapeFamily::ShapeFamily(const SceneDef& scene, ParticleStore& store, std::size_t first) : store_(store) {
+ShapeFamily::ShapeFamily(const SceneDef& scene, ParticleStore& store, std::size_t first)
+    : store_(store), first_id_(std::int32_t(first)) {
   std::size_t k = first;
   for (std::size_t c = 0; c < scene.shapes.size(); ++c) {
     ShapeDef s = scene.shapes[c];

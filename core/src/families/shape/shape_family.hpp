@@ -44,6 +44,8 @@ class ShapeFamily final : public Family {
   ShapeFamily(const SceneDef& scene, ParticleStore& store, std::size_t first);
 
   void add_passes(std::vector<Pass>& passes) override;
+  /// The id of the first shape particle (the shapes' particles have consecutive ids).
+  std::int32_t first_id() const { return first_id_; }
   void remap(std::span<const std::uint32_t> new_index) override { clusters_.remap(new_index); }
   void measure(FrameMetrics& m) override;
   void save_state(CheckpointChunks& chunks) const override;
@@ -57,6 +59,7 @@ class ShapeFamily final : public Family {
   kernels::ShapeClusters clusters_;
   std::vector<double> size_;    // per cluster: the RMS distance of its rest offsets, the error row's unit
   bool plastic_ = false;        // a body flows: the plasticity pass and chunk
+  std::int32_t first_id_ = 0;
 };
 
 }  // namespace seiche

@@ -1,4 +1,4 @@
-// Particle-particle contacts (cloth self-collision, cloth-cloth and cloth-fluid; Macklin et al.
+// Particle-particle contacts (cloth self-collision, cloth-cloth, cloth-fluid and shapes; Macklin et al.
 // 2014, "Unified particle physics", sec. 5 and 6.1): two particles closer than their contact
 // distance r are pushed apart along n = (p_i - p_j) / |p_i - p_j|,
 //   dp_i = w_i / (w_i + w_j) (r - |p_i - p_j|) n,
@@ -31,5 +31,28 @@ struct ParticleContacts {
 /// One Jacobi iteration. `scratch` is resized to 3 * c.size() and holds the corrections.
 void solve_particle_contacts(const ParticleView& p, const ParticleContacts& c, float friction,
                              std::vector<float>& scratch);
+
+/// Contacts of particles against partners that must get their full reaction (fluid particles
+/// against shape particles, whose corrections shape matching spreads over their clusters):
+/// `first` lists each particle's partners (CSR, as above); `second` lists, per partner particle,
+/// its entries in `first` (an index of the same pairs, in a fixed order).
+struct SidedContacts {
+  ParticleContacts first;
+  std::vector<std::uint32_t> second;        ///< store indices of the partner particles
+  std::vector<std::uint32_t> second_start;  ///< size second.size() + 1
+  std::vector<std::uint32_t> second_entry;  ///< per entry: its index in first.partner
+
+  void clear() { first.clear(), second.clear(), second_start.assign(1, 0), second_entry.clear(); }
+};
+
+/// One Jacobi iteration of momentum-keeping contacts, no friction. For particle i and each
+/// partner j closer than r, out of a_i such contacts of i:
+///   lambda = (r - d) / (w_i + w_j) / a_i,  n = (p_i - p_j) / d
+///   dp_i += w_i lambda n,  dp_j -= w_j lambda n
+/// so m_i dp_i + m_j dp_j = 0 for every pair: i's corrections are averaged (a fluid particle
+/// between two partners is not pushed twice), j gets the sum of its pairs' reactions. Each sum
+/// runs over a list in a fixed order: the same bits on any thread count. `scratch` holds the
+/// pairs' impulses and the corrections.
+void solve_sided_contacts(const ParticleView& p, const SidedContacts& c, std::vector<float>& scratch);
 
 }  // namespace seiche::kernels
