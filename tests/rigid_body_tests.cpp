@@ -2163,8 +2163,9 @@ TEST(FluidBody, BitIdenticalOnAnyThreadCountAndAcrossACheckpoint) {
 }
 
 // A body far too large for the fluid's spacing is refused when the scene is loaded (exit 2,
-// naming the body), not sampled into boundary particles for minutes; the same body without a
-// fluid, or a sphere mesh's size that fits, loads. A mesh body in fluid keeps the fluid out too.
+// naming the body), not sampled into boundary particles for minutes, and so are many bodies
+// that together cross the bound; the same body without a fluid, or a sphere mesh's size that
+// fits, loads. A mesh body in fluid keeps the fluid out too.
 TEST(FluidBody, BodyTooLargeForTheFluidsSpacingIsRefusedAndAMeshBodyKeepsFluidOut) {
   const auto scene = [](const std::string& fluid, const std::string& body) {
     return fmt::format(R"({{"domain": {{"min": [0, 0, 0], "max": [400, 400, 400]}}{},
@@ -2181,6 +2182,22 @@ TEST(FluidBody, BodyTooLargeForTheFluidsSpacingIsRefusedAndAMeshBodyKeepsFluidOu
     EXPECT_NE(e.problem().find("too large for the fluid's spacing 0.01 m"), std::string::npos) << e.what();
   }
   EXPECT_NO_THROW(load_scene_text(scene("", huge), "huge.json"));
+  // The bound is on all bodies together: 1 m boxes at 0.01 m are 100^3 = 1M lattice points each,
+  // so 16 load and the 17th crosses 16M; the refusal names it.
+  const auto boxes = [](int count) {
+    std::string list;
+    for (int k = 0; k < count; ++k)
+      list += fmt::format(R"({}{{"name": "b{}", "size": [1, 1, 1], "position": [{}, 2, 2]}})", k == 0 ? "" : ",", k, 2 + 2 * k);
+    return list;
+  };
+  EXPECT_NO_THROW(load_scene_text(scene(fluid, boxes(16)), "boxes.json"));
+  try {
+    load_scene_text(scene(fluid, boxes(17)), "boxes.json");
+    ADD_FAILURE() << "accepted";
+  } catch (const SceneError& e) {
+    EXPECT_EQ(e.json_path(), "rigid_bodies[16]");
+    EXPECT_NE(e.problem().find("the limit for all bodies together is 16000000"), std::string::npos) << e.what();
+  }
 
   // A closed box mesh (0.1 m) pushed sideways through a small pool: no particle inside it.
   std::vector<Vec3d> box;

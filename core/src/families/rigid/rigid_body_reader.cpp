@@ -165,6 +165,7 @@ void check_rigid_bodies(SceneDef& scene, const std::string& file) {
     fail(file, "rigid_bodies",
          fmt::format("{} bodies; at most {} (the contacts between bodies test every pair each substep)",
                      scene.rigid_bodies.size(), kMaxRigidBodies));
+  double boundary_lattices = 0.0;  // the fluid boundary's lattice points of the bodies so far
   for (std::size_t k = 0; k < scene.rigid_bodies.size(); ++k) {
     RigidBodyDef& b = scene.rigid_bodies[k];
     const std::string path = element_path("rigid_bodies", k);
@@ -185,13 +186,16 @@ void check_rigid_bodies(SceneDef& scene, const std::string& file) {
            fmt::format("gives a body of {:.3g} kg (density * volume); the lightest allowed is {:g} kg", m.mass,
                        kMinBodyMass));
     // With a fluid, the body is sampled into boundary particles at its spacing (fluid_body/).
+    // The bound is on all the bodies' lattices together: each is sampled at load.
     if (!scene.fluids.empty()) {
       const double lattice = fluid_body::boundary_lattice_size(body_shape_def(b), m.extent, scene.fluids[0].spacing);
-      if (lattice > fluid_body::kMaxBoundaryLattice)
+      boundary_lattices += lattice;
+      if (boundary_lattices > fluid_body::kMaxBoundaryLattice)
         fail(file, path,
              fmt::format("is too large for the fluid's spacing {} m: its boundary particles would be sampled on a "
-                         "lattice of {:.0f} points; the limit is {:.0f}",
-                         scene.fluids[0].spacing, lattice, fluid_body::kMaxBoundaryLattice));
+                         "lattice of {:.0f} points, {:.0f} with the bodies before it; the limit for all bodies "
+                         "together is {:.0f}",
+                         scene.fluids[0].spacing, lattice, boundary_lattices, fluid_body::kMaxBoundaryLattice));
     }
     if (!inside(b.position, scene.domain))
       fail(file, path + ".position",
