@@ -31,6 +31,7 @@
 #include <vector>
 
 #include "families/collider/collider_family.hpp"
+#include "families/fluid_body/body_boundary.hpp"
 #include "families/fluid_body/body_grid.hpp"
 #include "families/rigid/body_mesh.hpp"
 #include "families/rigid/body_shape.hpp"
@@ -2299,4 +2300,26 @@ TEST(FluidBody, BodyGridCandidatesHoldEveryBallThatHoldsThePointInSceneOrder) {
             std::vector<std::uint32_t>{0});
   const std::span<const std::uint32_t> second = grid.candidates({999.95, 0.05, 0});
   EXPECT_TRUE(std::find(second.begin(), second.end(), 1u) != second.end());
+}
+
+// A mesh body's field is built once and shared (rigid::BodyMeshFields): the contacts between
+// bodies, the particles' contacts and the fluid boundary get the same field; a box has none.
+TEST(MeshBodies, FieldIsBuiltOnceAndShared) {
+  std::vector<Vec3d> v;
+  Triangles t;
+  box_mesh({0, 0, 0}, {0.1, 0.1, 0.1}, v, t);
+  const fs::path obj = write_obj("shared_field", v, t);
+  const SceneDef scene = load_scene_text(fmt::format(R"({{
+    "rigid_bodies": [{{"name": "box", "position": [0.5, 0.8, 0.5]}},
+                     {{"name": "mesh", "shape": "mesh", "mesh": {{"file": "{}"}}, "position": [0.5, 0.5, 0.5]}}]
+  }})", obj.string()), "shared_field.json");
+  rigid::BodyMeshFields fields(scene.rigid_bodies);
+  EXPECT_EQ(fields.get(0), nullptr);
+  const std::shared_ptr<const MeshSdf> first = fields.get(1);
+  ASSERT_NE(first, nullptr);
+  EXPECT_EQ(fields.get(1), first);  // the same field, not a second one
+  // The fluid boundary keeps the field it is given.
+  const fluid_body::BodyBoundary boundary = fluid_body::sample_body_boundary(scene.rigid_bodies[1], first, 0.02, 0.04);
+  EXPECT_EQ(boundary.field, first);
+  EXPECT_FALSE(boundary.sites.empty());
 }

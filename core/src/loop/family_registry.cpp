@@ -96,7 +96,7 @@ void build_rigid(FamilyBuild& b) {
 void build_particle_body_contacts(FamilyBuild& b) {
   RigidFamily* rigid = b.find<RigidFamily>();
   if (rigid == nullptr || !ParticleBodyContacts::needed(b.scene)) return;
-  b.add(std::make_unique<ParticleBodyContacts>(b.scene, b.store, rigid->bodies()));
+  b.add(std::make_unique<ParticleBodyContacts>(b.scene, b.store, rigid->bodies(), rigid->body_mesh_fields()));
 }
 
 // Bodies and shapes in fluid: their boundary particles in the fluid's density (only with fluid

@@ -53,11 +53,12 @@ double boundary_lattice_size(const rigid::ShapeDims& dims, double extent, double
   return side * side * side;
 }
 
-BodyBoundary sample_body_boundary(const RigidBodyDef& def, std::size_t index, double spacing, double h) {
+BodyBoundary sample_body_boundary(const RigidBodyDef& def, std::shared_ptr<const MeshSdf> field, double spacing,
+                                  double h) {
   BodyBoundary b;
   const rigid::ShapeDims dims = rigid::body_shape_def(def);
   b.extent = rigid::mass_properties(dims).extent;
-  if (dims.shape == rigid::BodyShape::Mesh) b.field = rigid::body_mesh_sdf(def, index);
+  if (dims.shape == rigid::BodyShape::Mesh) b.field = std::move(field);
   b.solid = rigid::body_solid(dims, b.field.get());
   std::vector<Vec3d> sites = boundary_sites(dims, b.solid, b.extent, spacing, h);
 

@@ -72,8 +72,9 @@ struct BodyBoundary {
 double boundary_lattice_size(const rigid::ShapeDims& dims, double extent, double spacing);
 inline constexpr double kMaxBoundaryLattice = 4.0e6 * 4.0;
 
-/// The boundary of body `def` (scene.rigid_bodies[index]) for a fluid of spacing `spacing` and
-/// kernel radius `h` (m).
-BodyBoundary sample_body_boundary(const RigidBodyDef& def, std::size_t index, double spacing, double h);
+/// The boundary of body `def` for a fluid of spacing `spacing` and kernel radius `h` (m); `field`
+/// is a mesh body's field (rigid::BodyMeshFields), null for the other shapes.
+BodyBoundary sample_body_boundary(const RigidBodyDef& def, std::shared_ptr<const MeshSdf> field, double spacing,
+                                  double h);
 
 }  // namespace seiche::fluid_body

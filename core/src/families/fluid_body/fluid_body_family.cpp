@@ -93,7 +93,8 @@ FluidBodyFamily::FluidBodyFamily(const SceneDef& scene, ParticleStore& store, Fl
   const double spacing = scene.fluids[0].spacing;
   const double h = fluid.solver().kernel_radius();
   for (std::size_t k = 0; k < scene.rigid_bodies.size(); ++k)
-    boundaries_.push_back(fluid_body::sample_body_boundary(scene.rigid_bodies[k], k, spacing, h));
+    boundaries_.push_back(
+        fluid_body::sample_body_boundary(scene.rigid_bodies[k], rigid->body_mesh_fields().get(k), spacing, h));
   if (!scene.shapes.empty()) shapes_ = std::make_unique<fluid_body::ShapeBoundary>(scene, first_shape_id, h);
 }
 

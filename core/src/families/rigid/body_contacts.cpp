@@ -38,7 +38,8 @@ Vec3d relative_velocity(Vec3d v_a, Vec3d omega_a, Vec3d v_b, Vec3d omega_b, Vec3
 
 }  // namespace
 
-BodyContacts::BodyContacts(const SceneDef& scene, const std::vector<std::pair<int, int>>& jointed, double substep)
+BodyContacts::BodyContacts(const SceneDef& scene, const std::vector<std::pair<int, int>>& jointed, double substep,
+                           BodyMeshFields& mesh_fields)
     : h_(substep) {
   const Vec3 g = scene.solver.gravity;
   const Vec3d gravity{double(g[0]), double(g[1]), double(g[2])};
@@ -61,7 +62,7 @@ BodyContacts::BodyContacts(const SceneDef& scene, const std::vector<std::pair<in
     for (const ContactPoint& p : contact_points(def)) points_.push_back(p);
     b.end_point = int(points_.size());
     const ShapeDims dims = body_shape_def(def);
-    if (dims.shape == BodyShape::Mesh) mesh_sdfs_.push_back(body_mesh_sdf(def, k));
+    if (dims.shape == BodyShape::Mesh) mesh_sdfs_.push_back(mesh_fields.get(k));
     b.solid = body_solid(dims, dims.shape == BodyShape::Mesh ? mesh_sdfs_.back().get() : nullptr);
     b.extent = mass_properties(dims).extent;
     b.static_friction = def.friction, b.dynamic_friction = def.dynamic_friction, b.restitution = def.restitution;

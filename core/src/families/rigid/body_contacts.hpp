@@ -65,6 +65,7 @@
 #include <utility>
 #include <vector>
 
+#include "body_solid.hpp"
 #include "rigid_body.hpp"
 #include "seiche/scene.hpp"
 #include "world_contacts.hpp"
@@ -77,7 +78,8 @@ class BodyContacts {
   BodyContacts() = default;
   /// The scene's bodies; `jointed`: the pairs of body indices that never touch (rigid_family.cpp:
   /// joined by a joint, or in one articulation).
-  BodyContacts(const SceneDef& scene, const std::vector<std::pair<int, int>>& jointed, double substep);
+  BodyContacts(const SceneDef& scene, const std::vector<std::pair<int, int>>& jointed, double substep,
+               BodyMeshFields& mesh_fields);
 
   /// No pair of bodies can touch: nothing to do.
   bool empty() const { return candidates_.empty(); }

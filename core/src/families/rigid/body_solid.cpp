@@ -29,6 +29,13 @@ std::shared_ptr<const MeshSdf> body_mesh_sdf(const RigidBodyDef& def, std::size_
   return sdf;
 }
 
+std::shared_ptr<const MeshSdf> BodyMeshFields::get(std::size_t k) {
+  const RigidBodyDef& def = (*defs_)[k];
+  if (body_shape_def(def).shape != BodyShape::Mesh) return nullptr;
+  if (!fields_[k]) fields_[k] = body_mesh_sdf(def, k);
+  return fields_[k];
+}
+
 SolidSurface body_solid(const ShapeDims& d, const MeshSdf* sdf) {
   SolidSurface s;
   switch (d.shape) {

@@ -19,6 +19,21 @@ namespace seiche::rigid {
 
 /// A mesh body's field (body `index` of the scene: "rigid_bodies[index].mesh" in its errors).
 std::shared_ptr<const MeshSdf> body_mesh_sdf(const RigidBodyDef& def, std::size_t index);
+
+/// The mesh bodies' fields, each built on its first request and shared after: the contacts
+/// between bodies, the particles' contacts with bodies and the fluid boundary all read the same
+/// field (once a field of 64 voxels along the body's longest edge was built by each). Requests
+/// come while the families are built, serially.
+class BodyMeshFields {
+ public:
+  explicit BodyMeshFields(const std::vector<RigidBodyDef>& defs) : defs_(&defs), fields_(defs.size()) {}
+  /// Body k's field, or null when body k is not a mesh.
+  std::shared_ptr<const MeshSdf> get(std::size_t k);
+
+ private:
+  const std::vector<RigidBodyDef>* defs_;
+  std::vector<std::shared_ptr<const MeshSdf>> fields_;
+};
 /// The solid of shape `d`; a mesh's through `sdf` (owned by the caller).
 SolidSurface body_solid(const ShapeDims& d, const MeshSdf* sdf);
 

@@ -28,12 +28,12 @@ bool ParticleBodyContacts::needed(const SceneDef& scene) {
 }
 
 ParticleBodyContacts::ParticleBodyContacts(const SceneDef& scene, ParticleStore& store,
-                                           std::vector<RigidBody>& bodies)
+                                           std::vector<RigidBody>& bodies, rigid::BodyMeshFields& mesh_fields)
     : store_(store), bodies_(bodies) {
   for (std::size_t k = 0; k < scene.rigid_bodies.size(); ++k) {
     const RigidBodyDef& def = scene.rigid_bodies[k];
     const rigid::ShapeDims dims = rigid::body_shape_def(def);
-    if (dims.shape == rigid::BodyShape::Mesh) mesh_sdfs_.push_back(rigid::body_mesh_sdf(def, k));
+    if (dims.shape == rigid::BodyShape::Mesh) mesh_sdfs_.push_back(mesh_fields.get(k));
     const MeshSdf* sdf = dims.shape == rigid::BodyShape::Mesh ? mesh_sdfs_.back().get() : nullptr;
     solids_.push_back({rigid::body_solid(dims, sdf), rigid::mass_properties(dims).extent});
     body_friction_.push_back(double(def.friction));

@@ -36,6 +36,7 @@
 #include <vector>
 
 #include "loop/family.hpp"
+#include "body_solid.hpp"
 #include "rigid_body.hpp"
 #include "seiche/particle_store.hpp"
 #include "seiche/scene.hpp"
@@ -56,7 +57,7 @@ class ParticleBodyContacts final : public Family {
 
   /// `bodies`: the rigid family's bodies (scene order), moved by the contacts.
   ParticleBodyContacts(const SceneDef& scene, ParticleStore& store,
-                       std::vector<rigid::RigidBody>& bodies);
+                       std::vector<rigid::RigidBody>& bodies, rigid::BodyMeshFields& mesh_fields);
 
   void add_passes(std::vector<Pass>& passes) override;
 

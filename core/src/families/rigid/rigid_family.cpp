@@ -151,14 +151,15 @@ std::vector<std::pair<int, int>> contactless_pairs(const std::vector<Joint>& joi
 }  // namespace
 
 RigidFamily::RigidFamily(const SceneDef& scene, std::span<const std::shared_ptr<const MeshSdf>> mesh_fields)
-    : gravity_(to_d(scene.solver.gravity)),
+    : body_mesh_fields_(scene.rigid_bodies),
+      gravity_(to_d(scene.solver.gravity)),
       lowest_corner_(to_d(scene.domain.min)),
       h_(scene.solver.frame_dt / scene.solver.substeps) {
   std::vector<double> extent;
   bodies_ = make_bodies(scene, extent);
   joints_ = rigid::JointSolver(make_joints(scene, bodies_, extent), bodies_, scene.solver.joint_trees);
   contacts_ = rigid::WorldContacts(scene, h_, mesh_fields);
-  body_contacts_ = rigid::BodyContacts(scene, contactless_pairs(joints_.joints(), bodies_), h_);
+  body_contacts_ = rigid::BodyContacts(scene, contactless_pairs(joints_.joints(), bodies_), h_, body_mesh_fields_);
   start_energy_ = energy();
 }
 

@@ -31,6 +31,7 @@
 #include <vector>
 
 #include "body_contacts.hpp"
+#include "body_solid.hpp"
 #include "joint.hpp"
 #include "loop/family.hpp"
 #include "rigid_body.hpp"
@@ -56,6 +57,8 @@ class RigidFamily final : public Family {
   /// The bodies, for the passes of other families that move them (particle_body_contacts.hpp,
   /// fluid_body/fluid_body_family.hpp).
   std::vector<rigid::RigidBody>& bodies() { return bodies_; }
+  /// The mesh bodies' fields, built on first request and shared by whatever touches the bodies.
+  rigid::BodyMeshFields& body_mesh_fields() { return body_mesh_fields_; }
   const rigid::JointSolver& joints() const { return joints_; }
   /// Every body's position, orientation and velocities now, in scene order.
   std::vector<BodyPose> poses() const;
@@ -69,6 +72,7 @@ class RigidFamily final : public Family {
   std::vector<rigid::RigidBody> bodies_;
   rigid::JointSolver joints_;
   rigid::WorldContacts contacts_;  // with the domain's walls and the colliders
+  rigid::BodyMeshFields body_mesh_fields_;  // before body_contacts_, which reads it
   rigid::BodyContacts body_contacts_;  // between bodies
   rigid::Vec3d gravity_;
   rigid::Vec3d lowest_corner_;
