@@ -6,6 +6,7 @@
 
 #include <tbb/parallel_for.h>
 
+#include "families/fluid/fluid_ball_query.hpp"
 #include "seiche/phase.hpp"
 
 namespace seiche {
@@ -113,20 +114,7 @@ void ParticleContactStage::visit_candidates(const ParticleStore& store, const Ne
   // plus the fluid particle's radius.
   const float r = (i_cloth ? 0.5f * ti : store.radius[i]) + fluid_radius_;
   const float reach = kCandidateMargin * r;
-  const neighbor::CellGrid& grid = fluid->grid;
-  const int cells = int(std::ceil(reach / grid.spec().cell_size));
-  std::int32_t c[3];
-  grid.cell_of(xi, yi, zi, c);
-  const auto& d = grid.spec().dims;
-  for (int z = std::max(c[2] - cells, 0); z <= std::min(c[2] + cells, d[2] - 1); ++z)
-    for (int y = std::max(c[1] - cells, 0); y <= std::min(c[1] + cells, d[1] - 1); ++y)
-      for (int x = std::max(c[0] - cells, 0); x <= std::min(c[0] + cells, d[0] - 1); ++x) {
-        const std::uint32_t cell = grid.cell_index(x, y, z);
-        for (std::uint32_t j = grid.cell_begin(cell); j < grid.cell_end(cell); ++j) {
-          const float dx = xi - store.px[j], dy = yi - store.py[j], dz = zi - store.pz[j];
-          if (dx * dx + dy * dy + dz * dz < reach * reach) visit(j, r);
-        }
-      }
+  for_each_fluid_particle_within(fluid->grid, store, xi, yi, zi, reach, [&](std::uint32_t j) { visit(j, r); });
 }
 
 void ParticleContactStage::find_candidates(const ParticleStore& store, const Neighborhood* fluid) {

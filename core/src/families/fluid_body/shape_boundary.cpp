@@ -9,6 +9,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "families/fluid/fluid_ball_query.hpp"
 #include "families/shape/shape_sites.hpp"
 #include "seiche/phase.hpp"
 
@@ -74,19 +75,7 @@ void ShapeBoundary::find_pairs(const ParticleStore& store, const Neighborhood& f
   const auto visit_fluid = [&](std::uint32_t i, auto&& visit) {
     const float xi = store.px[i], yi = store.py[i], zi = store.pz[i];
     if (fluid_count == 0 || !std::isfinite(xi) || !std::isfinite(yi) || !std::isfinite(zi)) return;
-    const int cells = int(std::ceil(h / grid.spec().cell_size));
-    std::int32_t c[3];
-    grid.cell_of(xi, yi, zi, c);
-    const auto& d = grid.spec().dims;
-    for (int z = std::max(c[2] - cells, 0); z <= std::min(c[2] + cells, d[2] - 1); ++z)
-      for (int y = std::max(c[1] - cells, 0); y <= std::min(c[1] + cells, d[1] - 1); ++y)
-        for (int x = std::max(c[0] - cells, 0); x <= std::min(c[0] + cells, d[0] - 1); ++x) {
-          const std::uint32_t cell = grid.cell_index(x, y, z);
-          for (std::uint32_t j = grid.cell_begin(cell); j < grid.cell_end(cell); ++j) {
-            const float dx = xi - store.px[j], dy = yi - store.py[j], dz = zi - store.pz[j];
-            if (dx * dx + dy * dy + dz * dz < h * h) visit(j);
-          }
-        }
+    for_each_fluid_particle_within(grid, store, xi, yi, zi, h, visit);
   };
   // Shape-major: count, prefix sum, fill (each shape particle writes only its own range).
   shape_start_.assign(m + 1, 0);
