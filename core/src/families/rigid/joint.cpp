@@ -21,14 +21,6 @@ double hinge_angle_of(const Joint& j, const RigidBody& a, const RigidBody& b) {
   return portable_atan2(dot(cross(from, to), axis), dot(from, to));
 }
 
-// The rotation vector that turns unit u onto unit v (zero when they are parallel).
-Vec3d rotation_between(Vec3d u, Vec3d v) {
-  const Vec3d c = cross(u, v);
-  const double s = length(c);
-  if (!(s > 0.0)) return {};
-  return (portable_atan2(s, dot(u, v)) / s) * c;
-}
-
 // The universal joint's angular error: the rotation vector that turns unit v (body b's axis) from
 // perpendicular to unit u (body a's), -atan2(u . v, |u x v|) (u x v) / |u x v| (zero when they are
 // parallel, where no direction is preferred).
@@ -117,12 +109,17 @@ JointSolver::JointSolver(std::vector<Joint> joints, std::span<const RigidBody> b
 }
 
 void JointSolver::take_trees(std::span<const RigidBody> bodies) {
-  std::vector<BallLink> links;
+  std::vector<TreeLink> links;
   std::vector<std::size_t> joint_of;
   for (std::size_t k = 0; k < joints_.size(); ++k) {
     const Joint& j = joints_[k];
-    if (j.type != JointType::Ball) continue;
-    links.push_back({j.body_a, j.body_b, j.anchor_a, j.anchor_b, j.compliance});
+    const bool free_hinge = j.type == JointType::Hinge && !j.limited && j.motor == MotorMode::None;
+    if (j.type != JointType::Ball && !free_hinge && j.type != JointType::Fixed) continue;
+    const TreeJointType type = j.type == JointType::Ball    ? TreeJointType::Ball
+                               : j.type == JointType::Hinge ? TreeJointType::Hinge
+                                                            : TreeJointType::Fixed;
+    links.push_back({type, j.body_a, j.body_b, j.anchor_a, j.anchor_b, j.axis_a, j.axis_b, j.normal_a, j.rest_rotation,
+                     j.compliance});
     joint_of.push_back(k);
   }
   trees_ = JointTreeSolver(links, bodies);

@@ -1,7 +1,9 @@
-// The exact solve of the ball joints along spanning trees of the bodies (the math is in
-// joint_tree.hpp): the forest's construction, and one iteration's elimination and back
-// substitution with small dense blocks (6 x 6 bodies, 3 x 3 joints, Cholesky factors).
+// The exact solve of the ball, hinge and fixed joints along spanning trees of the bodies (the
+// math is in joint_tree.hpp): the forest's construction, and one iteration's elimination and back
+// substitution with small dense blocks (6 x 6 bodies, m x m joints, Cholesky factors).
 #include "joint_tree.hpp"
+
+#include "portable_trig.hpp"
 
 #include <cmath>
 #include <numeric>
@@ -44,28 +46,113 @@ std::array<double, N> cholesky_solve(const std::array<double, N * N>& l, std::ar
   return b;
 }
 
-using Jacobian = std::array<double, 18>;  // 3 x 6, row-major
-
-// sign [I, -[r]x]: the connector point's move (times sign) for a body move (dp, dtheta).
-Jacobian connector_jacobian(double sign, Vec3d r) {
-  return {sign, 0.0,  0.0,  0.0,         sign * r.z,  -sign * r.y,  //
-          0.0,  sign, 0.0,  -sign * r.z, 0.0,         sign * r.x,   //
-          0.0,  0.0,  sign, sign * r.y,  -sign * r.x, 0.0};
-}
-
-Vec3d times(const Jacobian& j, const std::array<double, 6>& z) {
-  double out[3];
-  for (int i = 0; i < 3; ++i) {
-    out[i] = 0.0;
-    for (int k = 0; k < 6; ++k) out[i] += j[i * 6 + k] * z[k];
+// The same for a joint's n x n block (n <= 6, row-major with stride n), the same operations.
+template <int n>
+bool cholesky_block(std::array<double, 36>& a) {
+  for (int j = 0; j < n; ++j) {
+    double d = a[std::size_t(j * n + j)];
+    for (int k = 0; k < j; ++k) d -= a[std::size_t(j * n + k)] * a[std::size_t(j * n + k)];
+    if (!(d > 0.0) || !std::isfinite(d)) return false;
+    const double l = std::sqrt(d);
+    a[std::size_t(j * n + j)] = l;
+    for (int i = j + 1; i < n; ++i) {
+      double s = a[std::size_t(i * n + j)];
+      for (int k = 0; k < j; ++k) s -= a[std::size_t(i * n + k)] * a[std::size_t(j * n + k)];
+      a[std::size_t(i * n + j)] = s / l;
+    }
   }
-  return {out[0], out[1], out[2]};
+  return true;
 }
 
-Vec3d times(const std::array<double, 9>& m, Vec3d v) {
-  return {m[0] * v.x + m[1] * v.y + m[2] * v.z, m[3] * v.x + m[4] * v.y + m[5] * v.z,
-          m[6] * v.x + m[7] * v.y + m[8] * v.z};
+template <int n>
+std::array<double, 6> cholesky_block_solve(const std::array<double, 36>& l, std::array<double, 6> b) {
+  for (int i = 0; i < n; ++i) {
+    for (int k = 0; k < i; ++k) b[std::size_t(i)] -= l[std::size_t(i * n + k)] * b[std::size_t(k)];
+    b[std::size_t(i)] /= l[std::size_t(i * n + i)];
+  }
+  for (int i = n - 1; i >= 0; --i) {
+    for (int k = i + 1; k < n; ++k) b[std::size_t(i)] -= l[std::size_t(k * n + i)] * b[std::size_t(k)];
+    b[std::size_t(i)] /= l[std::size_t(i * n + i)];
+  }
+  return b;
 }
+
+using Rows = std::array<double, 6>;
+using Jacobian = std::array<double, 36>;  // m x 6, row-major
+
+// The directions of a joint's angular rows (joint_tree.hpp): the hinge's two t_k, the fixed
+// joint's world axes.
+struct AngularRows {
+  int count = 0;
+  Vec3d t[3];
+};
+
+AngularRows angular_rows(const TreeLink& j, const RigidBody& a) {
+  if (j.type == TreeJointType::Hinge)
+    return {2, {rotate(a.q, j.normal_a), rotate(a.q, cross(j.axis_a, j.normal_a)), {}}};
+  if (j.type == TreeJointType::Fixed) return {3, {{1.0, 0.0, 0.0}, {0.0, 1.0, 0.0}, {0.0, 0.0, 1.0}}};
+  return {};
+}
+
+// The joint's rows for one of its bodies: sign [I, -[r]x] (the connector point's move, times
+// sign, for a body move (dp, dtheta)), then sign [0, t_k^T] per angular row.
+Jacobian link_jacobian(double sign, Vec3d r, const AngularRows& angular) {
+  Jacobian j{sign, 0.0,  0.0,  0.0,         sign * r.z,  -sign * r.y,  //
+             0.0,  sign, 0.0,  -sign * r.z, 0.0,         sign * r.x,   //
+             0.0,  0.0,  sign, sign * r.y,  -sign * r.x, 0.0};
+  for (int k = 0; k < angular.count; ++k) {
+    const Vec3d t = sign * angular.t[k];
+    j[std::size_t((3 + k) * 6 + 3)] = t.x, j[std::size_t((3 + k) * 6 + 4)] = t.y, j[std::size_t((3 + k) * 6 + 5)] = t.z;
+  }
+  return j;
+}
+
+// C_e on the bodies as they are: P_b - P_a, then the angular rows.
+Rows link_error(const TreeLink& j, const RigidBody& a, const RigidBody& b, const AngularRows& angular) {
+  const Vec3d d = b.world_point(j.anchor_b) - a.world_point(j.anchor_a);
+  Rows c{d.x, d.y, d.z, 0.0, 0.0, 0.0};
+  if (j.type == TreeJointType::Hinge) {
+    const Vec3d e = rotation_between(rotate(a.q, j.axis_a), rotate(b.q, j.axis_b));
+    c[3] = dot(angular.t[0], e), c[4] = dot(angular.t[1], e);
+  } else if (j.type == TreeJointType::Fixed) {
+    const Vec3d e = rotation_vector(b.q * conjugate(a.q * j.rest_rotation));
+    c[3] = e.x, c[4] = e.y, c[5] = e.z;
+  }
+  return c;
+}
+
+int rows_of(TreeJointType type) { return type == TreeJointType::Ball ? 3 : type == TreeJointType::Hinge ? 5 : 6; }
+
+// j z for an m x 6 j.
+template <int m>
+Rows times(const Jacobian& j, const std::array<double, 6>& z) {
+  Rows out{};
+  for (int i = 0; i < m; ++i) {
+    out[std::size_t(i)] = 0.0;
+    for (int k = 0; k < 6; ++k) out[std::size_t(i)] += j[std::size_t(i * 6 + k)] * z[std::size_t(k)];
+  }
+  return out;
+}
+
+// a v for an m x m a.
+template <int m>
+Rows times_square(const std::array<double, 36>& a, const Rows& v) {
+  Rows out{};
+  for (int i = 0; i < m; ++i) {
+    double sum = a[std::size_t(i * m)] * v[0];
+    for (int k = 1; k < m; ++k) sum += a[std::size_t(i * m + k)] * v[std::size_t(k)];
+    out[std::size_t(i)] = sum;
+  }
+  return out;
+}
+
+double squared_norm(const Rows& v, int m) {
+  double sum = v[0] * v[0];
+  for (int k = 1; k < m; ++k) sum += v[std::size_t(k)] * v[std::size_t(k)];
+  return sum;
+}
+
+double norm(const Rows& v, int m) { return std::sqrt(squared_norm(v, m)); }
 
 // diag(m I, I_world) of a movable body.
 std::array<double, 36> generalized_mass(const RigidBody& b) {
@@ -105,7 +192,14 @@ int find_root(std::vector<int>& root, int v) {
 
 }  // namespace
 
-JointTreeSolver::JointTreeSolver(std::span<const BallLink> links, std::span<const RigidBody> bodies)
+Vec3d rotation_between(Vec3d u, Vec3d v) {
+  const Vec3d c = cross(u, v);
+  const double s = length(c);
+  if (!(s > 0.0)) return {};
+  return (portable_atan2(s, dot(u, v)) / s) * c;
+}
+
+JointTreeSolver::JointTreeSolver(std::span<const TreeLink> links, std::span<const RigidBody> bodies)
     : links_(links.begin(), links.end()), in_forest_(links.size(), 0) {
   const int ground = int(bodies.size());
   const auto node_of = [&](int body) { return body < 0 || bodies[std::size_t(body)].fixed() ? ground : body; };
@@ -113,7 +207,7 @@ JointTreeSolver::JointTreeSolver(std::span<const BallLink> links, std::span<cons
   std::iota(root.begin(), root.end(), 0);
   std::vector<std::vector<std::pair<int, int>>> adjacent(std::size_t(ground) + 1);  // (other node, joint)
   for (std::size_t e = 0; e < links_.size(); ++e) {
-    const BallLink& j = links_[e];
+    const TreeLink& j = links_[e];
     const int a = node_of(j.body_a), b = node_of(j.body_b);
     const int root_a = find_root(root, a), root_b = find_root(root, b);
     if (root_a == root_b) continue;  // closes a loop: the iterative solve keeps it
@@ -128,7 +222,8 @@ JointTreeSolver::JointTreeSolver(std::span<const BallLink> links, std::span<cons
       for (const auto& [other, e] : adjacent[std::size_t(nodes_[p].body)])
         if (!seen[std::size_t(other)]) {
           seen[std::size_t(other)] = 1;
-          nodes_.push_back({other, int(p), e, links_[std::size_t(e)].body_b == other, {}, {}});
+          nodes_.push_back({other, int(p), e, links_[std::size_t(e)].body_b == other,
+                            rows_of(links_[std::size_t(e)].type), {}, {}});
         }
   };
   // One tree per joint to the ground (the ground is fixed, so they are independent), then one
@@ -138,14 +233,14 @@ JointTreeSolver::JointTreeSolver(std::span<const BallLink> links, std::span<cons
   for (const auto& [other, e] : adjacent[std::size_t(ground)]) {
     if (seen[std::size_t(other)]) continue;
     seen[std::size_t(other)] = 1;
-    nodes_.push_back({other, -1, e, links_[std::size_t(e)].body_b == other, {}, {}});
+    nodes_.push_back({other, -1, e, links_[std::size_t(e)].body_b == other, rows_of(links_[std::size_t(e)].type), {}, {}});
     grow(tree_start_.back());
     tree_start_.push_back(nodes_.size());
   }
   for (int v = 0; v < ground; ++v) {
     if (seen[std::size_t(v)] || adjacent[std::size_t(v)].empty()) continue;
     seen[std::size_t(v)] = 1;
-    nodes_.push_back({v, -1, -1, true, {}, {}});
+    nodes_.push_back({v, -1, -1, true, 3, {}, {}});
     grow(tree_start_.back());
     tree_start_.push_back(nodes_.size());
   }
@@ -153,17 +248,95 @@ JointTreeSolver::JointTreeSolver(std::span<const BallLink> links, std::span<cons
 }
 
 void JointTreeSolver::reset_multipliers() {
-  for (Node& n : nodes_) n.previous_lambda = n.lambda, n.lambda = {};
+  for (Node& n : nodes_) n.previous_lambda = {n.lambda[0], n.lambda[1], n.lambda[2]}, n.lambda = {};
 }
 
 std::vector<Vec3d> JointTreeSolver::multipliers() const {
   std::vector<Vec3d> lambdas;
-  for (const Node& n : nodes_) lambdas.push_back(n.lambda);
+  for (const Node& n : nodes_) lambdas.push_back({n.lambda[0], n.lambda[1], n.lambda[2]});
+  for (const Node& n : nodes_)
+    if (n.rows > 3) lambdas.push_back({n.lambda[3], n.lambda[4], n.lambda[5]});
   return lambdas;
 }
 
 void JointTreeSolver::restore_multipliers(std::span<const Vec3d> lambdas) {
-  for (std::size_t i = 0; i < nodes_.size() && i < lambdas.size(); ++i) nodes_[i].lambda = lambdas[i];
+  std::size_t next = 0;
+  for (Node& n : nodes_)
+    if (next < lambdas.size()) n.lambda[0] = lambdas[next].x, n.lambda[1] = lambdas[next].y, n.lambda[2] = lambdas[next].z, ++next;
+  for (Node& n : nodes_)
+    if (n.rows > 3 && next < lambdas.size())
+      n.lambda[3] = lambdas[next].x, n.lambda[4] = lambdas[next].y, n.lambda[5] = lambdas[next].z, ++next;
+}
+
+template <int m>
+bool JointTreeSolver::eliminate(std::size_t i, const RigidBody& a, const RigidBody& b, double inverse_h2) {
+  const Node& n = nodes_[i];
+  Work& w = work_[i];
+  const TreeLink& j = links_[std::size_t(n.link)];
+  const Vec3d r_a = rotate(a.q, j.anchor_a), r_b = rotate(b.q, j.anchor_b);
+  const AngularRows angular = angular_rows(j, a);
+  const Jacobian own = n.body_is_b ? link_jacobian(1.0, r_b, angular) : link_jacobian(-1.0, r_a, angular);
+  w.jp = n.parent < 0 ? Jacobian{} : n.body_is_b ? link_jacobian(-1.0, r_a, angular) : link_jacobian(1.0, r_b, angular);
+  for (int c = 0; c < m; ++c) {  // G = K^-1 J_ev^T, column by column
+    const Vec6 column = cholesky_solve<6>(w.k, {own[std::size_t(c * 6)], own[std::size_t(c * 6 + 1)], own[std::size_t(c * 6 + 2)],
+                                                own[std::size_t(c * 6 + 3)], own[std::size_t(c * 6 + 4)], own[std::size_t(c * 6 + 5)]});
+    for (int k = 0; k < 6; ++k) w.g[std::size_t(k * m + c)] = column[std::size_t(k)];
+  }
+  const double alpha = j.compliance * inverse_h2;
+  std::array<double, 36> d{};
+  for (int row = 0; row < m; ++row)
+    for (int c = 0; c < m; ++c) {
+      double sum = row == c ? alpha : 0.0;
+      for (int k = 0; k < 6; ++k) sum += own[std::size_t(row * 6 + k)] * w.g[std::size_t(k * m + c)];
+      d[std::size_t(row * m + c)] = sum;
+    }
+  if (!cholesky_block<m>(d)) return false;
+  for (int c = 0; c < m; ++c) {
+    Rows unit{};
+    unit[std::size_t(c)] = 1.0;
+    const Rows column = cholesky_block_solve<m>(d, unit);
+    for (int row = 0; row < m; ++row) w.d_inv[std::size_t(row * m + c)] = column[std::size_t(row)];
+  }
+  w.alpha = alpha;
+  const Rows error = link_error(j, a, b, angular);
+  const Rows moved = times<m>(own, w.u);
+  Rows rest{};
+  for (int row = 0; row < m; ++row) {
+    w.b[std::size_t(row)] = -error[std::size_t(row)] - alpha * n.lambda[std::size_t(row)];
+    rest[std::size_t(row)] = w.b[std::size_t(row)] - moved[std::size_t(row)];
+  }
+  w.s = times_square<m>(w.d_inv, rest);
+  if (n.parent < 0) return true;
+  // The parent's K += J_ep^T D^-1 J_ep, r += J_ep^T s.
+  Work& p = work_[std::size_t(n.parent)];
+  std::array<double, 36> x{};  // D^-1 J_ep
+  for (int row = 0; row < m; ++row)
+    for (int k = 0; k < 6; ++k)
+      for (int l = 0; l < m; ++l)
+        x[std::size_t(row * 6 + k)] += w.d_inv[std::size_t(row * m + l)] * w.jp[std::size_t(l * 6 + k)];
+  for (int row = 0; row < 6; ++row) {
+    for (int c = 0; c < 6; ++c)
+      for (int l = 0; l < m; ++l)
+        p.k[std::size_t(row * 6 + c)] += w.jp[std::size_t(l * 6 + row)] * x[std::size_t(l * 6 + c)];
+    double sum = w.jp[std::size_t(row)] * w.s[0];
+    for (int l = 1; l < m; ++l) sum += w.jp[std::size_t(l * 6 + row)] * w.s[std::size_t(l)];
+    p.r[std::size_t(row)] += sum;
+  }
+  return true;
+}
+
+template <int m>
+void JointTreeSolver::substitute(std::size_t i) {
+  const Node& n = nodes_[i];
+  Work& w = work_[i];
+  const Rows across = n.parent < 0 ? Rows{} : times<m>(w.jp, work_[std::size_t(n.parent)].dx);
+  const Rows pulled = times_square<m>(w.d_inv, across);
+  for (int row = 0; row < m; ++row) w.dlambda[std::size_t(row)] = w.s[std::size_t(row)] - pulled[std::size_t(row)];
+  for (int k = 0; k < 6; ++k) {
+    double sum = w.u[std::size_t(k)];
+    for (int c = 0; c < m; ++c) sum += w.g[std::size_t(k * m + c)] * w.dlambda[std::size_t(c)];
+    w.dx[std::size_t(k)] = sum;
+  }
 }
 
 void JointTreeSolver::solve(std::span<RigidBody> bodies, double h) {
@@ -179,7 +352,7 @@ void JointTreeSolver::solve(std::span<RigidBody> bodies, double h) {
   for (std::size_t i = 0; i < nodes_.size(); ++i) {
     const Node& n = nodes_[i];
     if (n.link < 0) continue;
-    const BallLink& j = links_[std::size_t(n.link)];
+    const TreeLink& j = links_[std::size_t(n.link)];
     const RigidBody &a = body(j.body_a), &b = body(j.body_b);
     const Vec3d r_a = rotate(a.q, j.anchor_a), r_b = rotate(b.q, j.anchor_b);
     // The impulse on b is +lambda, on a -lambda.
@@ -196,63 +369,23 @@ void JointTreeSolver::solve(std::span<RigidBody> bodies, double h) {
     if (!cholesky<6>(w.k)) return;
     w.u = cholesky_solve<6>(w.k, w.r);
     if (n.link < 0) continue;  // a free root
-    const BallLink& j = links_[std::size_t(n.link)];
+    const TreeLink& j = links_[std::size_t(n.link)];
     const RigidBody &a = body(j.body_a), &b = body(j.body_b);
-    const Vec3d r_a = rotate(a.q, j.anchor_a), r_b = rotate(b.q, j.anchor_b);
-    const Jacobian own = n.body_is_b ? connector_jacobian(1.0, r_b) : connector_jacobian(-1.0, r_a);
-    w.jp = n.parent < 0 ? Jacobian{} : n.body_is_b ? connector_jacobian(-1.0, r_a) : connector_jacobian(1.0, r_b);
-    for (int c = 0; c < 3; ++c) {  // G = K^-1 J_ev^T, column by column
-      const Vec6 column = cholesky_solve<6>(w.k, {own[c * 6], own[c * 6 + 1], own[c * 6 + 2], own[c * 6 + 3],
-                                                  own[c * 6 + 4], own[c * 6 + 5]});
-      for (int k = 0; k < 6; ++k) w.g[std::size_t(k * 3 + c)] = column[std::size_t(k)];
-    }
-    const double alpha = j.compliance * inverse_h2;
-    std::array<double, 9> d{};
-    for (int row = 0; row < 3; ++row)
-      for (int c = 0; c < 3; ++c) {
-        double sum = row == c ? alpha : 0.0;
-        for (int k = 0; k < 6; ++k) sum += own[std::size_t(row * 6 + k)] * w.g[std::size_t(k * 3 + c)];
-        d[std::size_t(row * 3 + c)] = sum;
-      }
-    if (!cholesky<3>(d)) return;
-    for (int c = 0; c < 3; ++c) {
-      std::array<double, 3> unit{};
-      unit[std::size_t(c)] = 1.0;
-      const std::array<double, 3> column = cholesky_solve<3>(d, unit);
-      for (int row = 0; row < 3; ++row) w.d_inv[std::size_t(row * 3 + c)] = column[std::size_t(row)];
-    }
-    w.alpha = alpha;
-    w.b = -((b.x + r_b) - (a.x + r_a)) - alpha * n.lambda;
-    w.s = times(w.d_inv, w.b - times(own, w.u));
-    if (n.parent < 0) continue;
-    // The parent's K += J_ep^T D^-1 J_ep, r += J_ep^T s.
-    Work& p = work_[std::size_t(n.parent)];
-    std::array<double, 18> x{};  // D^-1 J_ep
-    for (int row = 0; row < 3; ++row)
-      for (int k = 0; k < 6; ++k)
-        for (int m = 0; m < 3; ++m)
-          x[std::size_t(row * 6 + k)] += w.d_inv[std::size_t(row * 3 + m)] * w.jp[std::size_t(m * 6 + k)];
-    for (int row = 0; row < 6; ++row) {
-      for (int c = 0; c < 6; ++c)
-        for (int m = 0; m < 3; ++m)
-          p.k[std::size_t(row * 6 + c)] += w.jp[std::size_t(m * 6 + row)] * x[std::size_t(m * 6 + c)];
-      p.r[std::size_t(row)] += w.jp[std::size_t(row)] * w.s.x + w.jp[std::size_t(6 + row)] * w.s.y +
-                               w.jp[std::size_t(12 + row)] * w.s.z;
-    }
+    const bool factored = n.rows == 3   ? eliminate<3>(i, a, b, inverse_h2)
+                          : n.rows == 5 ? eliminate<5>(i, a, b, inverse_h2)
+                                        : eliminate<6>(i, a, b, inverse_h2);
+    if (!factored) return;
   }
   // Roots to leaves.
   for (std::size_t i = 0; i < nodes_.size(); ++i) {
     const Node& n = nodes_[i];
-    Work& w = work_[i];
     if (n.link < 0) {
-      w.dx = w.u;
+      work_[i].dx = work_[i].u;
       continue;
     }
-    const Vec3d across = n.parent < 0 ? Vec3d{} : times(w.jp, work_[std::size_t(n.parent)].dx);
-    w.dlambda = w.s - times(w.d_inv, across);
-    for (int k = 0; k < 6; ++k)
-      w.dx[std::size_t(k)] = w.u[std::size_t(k)] + w.g[std::size_t(k * 3)] * w.dlambda.x +
-                             w.g[std::size_t(k * 3 + 1)] * w.dlambda.y + w.g[std::size_t(k * 3 + 2)] * w.dlambda.z;
+    if (n.rows == 3) substitute<3>(i);
+    else if (n.rows == 5) substitute<5>(i);
+    else substitute<6>(i);
   }
   for (std::size_t t = 0; t + 1 < tree_start_.size(); ++t) line_search(tree_start_[t], tree_start_[t + 1], bodies);
 }
@@ -266,10 +399,13 @@ double JointTreeSolver::merit_penalty(std::size_t begin, std::size_t end, std::s
     const Node& n = nodes_[i];
     if (n.link < 0) continue;
     const Work& w = work_[i];
-    const BallLink& j = links_[std::size_t(n.link)];
+    const TreeLink& j = links_[std::size_t(n.link)];
     const RigidBody &a = body(j.body_a), &b = body(j.body_b);
-    const Vec3d error = b.world_point(j.anchor_b) - a.world_point(j.anchor_a);
-    penalty += length(w.dlambda) * length(error + w.alpha * (n.lambda + beta * w.dlambda));
+    const Rows error = link_error(j, a, b, angular_rows(j, a));
+    Rows residual{};
+    for (int row = 0; row < n.rows; ++row)
+      residual[std::size_t(row)] = error[std::size_t(row)] + w.alpha * (n.lambda[std::size_t(row)] + beta * w.dlambda[std::size_t(row)]);
+    penalty += norm(w.dlambda, n.rows) * norm(residual, n.rows);
   }
   return penalty;
 }
@@ -282,8 +418,8 @@ void JointTreeSolver::line_search(std::size_t begin, std::size_t end, std::span<
     const Vec3d dp{w.dx[0], w.dx[1], w.dx[2]}, dtheta{w.dx[3], w.dx[4], w.dx[5]};
     quadratic += dot(dp, dp) / b.inverse_mass + dot(dtheta, b.world_inertia(dtheta));
     if (nodes_[i].link >= 0) {
-      decrease += length(w.dlambda) * length(w.b);
-      quadratic += w.alpha * dot(w.dlambda, w.dlambda);
+      decrease += norm(w.dlambda, nodes_[i].rows) * norm(w.b, nodes_[i].rows);
+      quadratic += w.alpha * squared_norm(w.dlambda, nodes_[i].rows);
     }
     w.x0 = b.x, w.q0 = b.q;
   }
@@ -307,7 +443,8 @@ void JointTreeSolver::line_search(std::size_t begin, std::size_t end, std::span<
     }
     beta *= 0.5;
   }
-  for (std::size_t i = begin; i < end; ++i) nodes_[i].lambda += beta * work_[i].dlambda;
+  for (std::size_t i = begin; i < end; ++i)
+    for (int row = 0; row < nodes_[i].rows; ++row) nodes_[i].lambda[std::size_t(row)] += beta * work_[i].dlambda[std::size_t(row)];
 }
 
 }  // namespace seiche::rigid
