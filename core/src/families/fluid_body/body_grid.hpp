@@ -13,6 +13,8 @@
 // are its cell's list: every body whose ball holds the point is in it, and the order is the
 // scene's, so a pass that skips the others visits the same bodies in the same order as a loop
 // over all bodies with the ball test (the same bits). A point outside the grid has none.
+// Not neighbor::CellGrid: that sorts points into one cell each, while a body's ball spans many
+// cells and must be listed in each.
 #pragma once
 
 #include <cstdint>
