@@ -8,9 +8,11 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
+#include "families/fluid/fluid_ball_query.hpp"
 #include "families/rigid/body_correction.hpp"
 #include "seiche/kernels/blocked_reduce.hpp"
 #include "seiche/kernels/sph_kernels.hpp"
+#include "seiche/phase.hpp"
 
 namespace seiche {
 
@@ -96,6 +98,8 @@ FluidBodyFamily::FluidBodyFamily(const SceneDef& scene, ParticleStore& store, Fl
     boundaries_.push_back(
         fluid_body::sample_body_boundary(scene.rigid_bodies[k], rigid->body_mesh_fields().get(k), spacing, h));
   if (!scene.shapes.empty()) shapes_ = std::make_unique<fluid_body::ShapeBoundary>(scene, first_shape_id, h);
+  fluid.set_boundary_density(
+      [this](const FluidErrorProbe::Positions& at, double* density) { measured_boundary_density(at, density); });
 }
 
 void FluidBodyFamily::add_passes(std::vector<Pass>& passes) {
@@ -175,6 +179,37 @@ void FluidBodyFamily::gather_boundary() {
     }
   });
   fluid_.solver().set_boundary(boundary_.data());
+}
+
+void FluidBodyFamily::measured_boundary_density(const FluidErrorProbe::Positions& at, double* density) {
+  const kernels::PbfParams& prm = fluid_.solver().params();
+  const kernels::SphKernel kernel(prm.h);
+  const double rho0 = prm.rest_density;
+  if (rigid_ != nullptr) {
+    build_grid(false);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, at.fluid, 4096), [&](const auto& range) {
+      for (std::size_t k = range.begin(); k != range.end(); ++k) {
+        double sum = 0.0;
+        for_each_site(Vec3d{at.x[k], at.y[k], at.z[k]}, [&](std::size_t body, std::uint32_t s, Vec3d r) {
+          sum += rho0 * boundaries_[body].psi[s] * double(kernel.poly6(float(dot(r, r))));
+        });
+        density[k] += sum;
+      }
+    });
+  }
+  if (!shapes_) return;
+  // Shape particle by shape particle in the probe's order (serial: each adds to its fluid neighbours).
+  for (std::size_t k = at.fluid; k < at.order.size(); ++k) {
+    const std::uint32_t i = at.order[k];
+    if (phase_material(store_.phase[i]) != Material::Shape) continue;
+    const float xb = at.x[k], yb = at.y[k], zb = at.z[k];
+    if (!std::isfinite(xb) || !std::isfinite(yb) || !std::isfinite(zb)) continue;
+    const double psi = shapes_->volume(store_.id[i]);
+    for_each_fluid_particle_within(at.grid, at.x, at.y, at.z, xb, yb, zb, float(prm.h), [&](std::uint32_t j) {
+      const float rx = at.x[j] - xb, ry = at.y[j] - yb, rz = at.z[j] - zb;
+      density[j] += rho0 * psi * double(kernel.poly6(rx * rx + ry * ry + rz * rz));
+    });
+  }
 }
 
 void FluidBodyFamily::solve_density() {

@@ -27,6 +27,10 @@
 //     query of body_solid.hpp in the body frame) is a contact:
 //       dlambda = d / (1/m + w_body),  w_body = 1/M + (r x n)^T I^-1 (r x n),  r = p_i - x_body
 //       p_i += dlambda / m n,  the body gets the impulse -dlambda n at r
+// The run report's density error is of the same rho_i as the constraint's, boundary included: at
+// the end of a frame, the fluid's error probe asks this family for rho_b,i + rho_s,i at the final
+// positions (the bodies' sites at their poses then; the shape particles within h of each fluid
+// particle in the probe's grid, summed shape particle by shape particle in the probe's order).
 // Fluid particles write only their own positions (in parallel); the impulses on a body add up
 // per block of particles and the blocks in index order, then move the body once (linear part
 // through 1/M, angular through I^-1: body_correction.hpp), so the bits do not depend on the
@@ -63,6 +67,9 @@ class FluidBodyFamily final : public Family {
   void gather_boundary();
   void solve_density();
   void separate();
+  /// The boundary's density rho_b,k + rho_s,k of each fluid particle k of `at` (the error
+  /// probe's positions) into density[k].
+  void measured_boundary_density(const FluidErrorProbe::Positions& at, double* density);
   /// Calls visit(body k, site s, q - site) for every site within reach of world point p (q: p
   /// in body k's frame).
   template <class Visit>
