@@ -110,6 +110,9 @@ void FluidBodyFamily::add_passes(std::vector<Pass>& passes) {
                     [this](const StepContext&) { gather_boundary(); }});
   passes.push_back({"fluid-body density", Stage::Iterate, pass_order::kFluidBodyDensity, true,
                     [this](const StepContext&) { solve_density(); }});
+  if (fluid_.solver().has_viscosity())
+    passes.push_back({"fluid-body viscosity", Stage::Velocity, pass_order::kFluidBodyViscosity, true,
+                      [this](const StepContext&) { apply_viscosity(); }});
   if (rigid_ == nullptr) return;  // shapes only: their contacts with the fluid are particle contacts
   passes.push_back({"fluid-body separation", Stage::Iterate, pass_order::kFluidBodySeparation, true,
                     [this](const StepContext&) { separate(); }});
@@ -247,6 +250,47 @@ void FluidBodyFamily::solve_density() {
     });
     flush();
     px[i] += float(dp.x), py[i] += float(dp.y), pz[i] += float(dp.z);
+  });
+}
+
+void FluidBodyFamily::apply_viscosity() {
+  const kernels::PbfParams& prm = fluid_.solver().params();
+  const kernels::SphKernel kernel(prm.h);
+  const double c = fluid_.solver().viscosity();
+  const std::size_t n = fluid_.neighborhood().count();
+  const std::vector<RigidBody>& bodies = this->bodies();
+  const float* x = store_.x.data();
+  const float* y = store_.y.data();
+  const float* z = store_.z.data();
+  float* vx = store_.vx.data();
+  float* vy = store_.vy.data();
+  float* vz = store_.vz.data();
+  build_grid(false);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const auto& range) {
+    for (std::size_t i = range.begin(); i != range.end(); ++i) {
+      const Vec3d p{x[i], y[i], z[i]}, v{vx[i], vy[i], vz[i]};
+      Vec3d pull;  // sum_b psi_b (v_b - v_i) W
+      bool near = false;
+      for_each_site(p, [&](std::size_t k, std::uint32_t s, Vec3d r) {
+        const double w = boundaries_[k].psi[s] * double(kernel.poly6(float(dot(r, r))));
+        if (!(w > 0.0)) return;
+        const RigidBody& b = bodies[k];
+        const Vec3d site_velocity = b.v + cross(b.omega, rotate(b.q, boundaries_[k].sites[s]));
+        pull += w * (site_velocity - v);
+        near = true;
+      });
+      if (shapes_)
+        shapes_->for_each_pair_of(i, [&](std::uint32_t b, double psi) {
+          const float rx = x[i] - x[b], ry = y[i] - y[b], rz = z[i] - z[b];
+          const double w = psi * double(kernel.poly6(rx * rx + ry * ry + rz * rz));
+          if (!(w > 0.0)) return;
+          pull += w * (Vec3d{vx[b], vy[b], vz[b]} - v);
+          near = true;
+        });
+      if (!near) continue;
+      const Vec3d after = v + c * pull;
+      vx[i] = float(after.x), vy[i] = float(after.y), vz[i] = float(after.z);
+    }
   });
 }
 

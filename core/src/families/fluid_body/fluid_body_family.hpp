@@ -22,6 +22,15 @@
 //       dp_i = lambda_i g_b,i   (the boundary's part of lambda_i grad_{p_i} C_i)
 //     and each site's share, -m lambda_i psi_b grad W(p_i - x_b) at the kept p_i, is an impulse
 //     on its body at x_b: the pair's momentum is kept exactly.
+//   "fluid-body viscosity" (velocity stage, after the fluid's XSPH, where the fluid has a
+//     viscosity c): the boundary particles in XSPH, with the boundary's velocity at each site
+//     (a body's v + omega x (x_b - x_body); a shape particle's own velocity):
+//       v_i += c sum_b psi_b (v_b - v_i) W(|x_i - x_b|)
+//     so fluid at a body's wall is pulled toward the wall's velocity (no-slip, as XSPH pulls it
+//     toward its fluid neighbours'). It reads v_i as the fluid's XSPH left it (split, not one
+//     Jacobi sum) and changes only the fluid: the bodies and shapes get no reaction (their
+//     drag comes from the density constraint and the separation). Vorticity confinement does
+//     not see the boundary.
 //   "fluid-body separation" (after the joints and the body contacts): a fluid particle whose
 //     ball (radius s/2) reaches depth d into a body's solid along normal n (the solid's shape
 //     query of body_solid.hpp in the body frame) is a contact:
@@ -67,6 +76,7 @@ class FluidBodyFamily final : public Family {
   void gather_boundary();
   void solve_density();
   void separate();
+  void apply_viscosity();
   /// The boundary's density rho_b,k + rho_s,k of each fluid particle k of `at` (the error
   /// probe's positions) into density[k].
   void measured_boundary_density(const FluidErrorProbe::Positions& at, double* density);
