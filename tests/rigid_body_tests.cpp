@@ -41,8 +41,10 @@
 #include "families/rigid/rigid_body.hpp"
 #include "families/rigid/rigid_family.hpp"
 #include "seiche/body_exporter.hpp"
+#include "families/shape/shape_sites.hpp"
 #include "seiche/checkpoint.hpp"
 #include "seiche/input_fingerprint.hpp"
+#include "seiche/memory_estimate.hpp"
 #include "seiche/output_files.hpp"
 #include "seiche/scene_loader.hpp"
 #include "seiche/simulation.hpp"
@@ -2457,6 +2459,81 @@ TEST(AllMaterials, RagdollInClothHeldByTheHammockOverAPoolWithAFloatingCrate) {
   }
   EXPECT_GT(shape_particles, 100u);
   EXPECT_EQ(coupled_state(scene, 30, 2), coupled_state(scene, 30, 1));
+}
+
+// The memory estimate counts the coupling before anything is built: a box body in a fluid adds
+// its boundary sites (exactly those sample_body_boundary keeps), its grid's cells and the per
+// fluid particle arrays; a mesh body its field, the samples its built field has; a shape in the
+// fluid its pairs at the fluid's neighbor bound. A body whose boundary is over --max-memory is
+// refused naming its size (exit 2 in the CLI, app_tests).
+TEST(FluidBody, MemoryEstimateCountsTheBoundaryTheFieldsAndThePairs) {
+  const std::string fluid = R"("domain": {"min": [0, 0, 0], "max": [1, 1, 1]},
+    "fluids": [{"box": {"min": [0, 0, 0], "max": [0.2, 0.2, 0.2]}, "spacing": 0.02}])";
+  const SceneDef plain = load_scene_text("{" + fluid + "}", "plain.json");
+  const SceneDef with_box = load_scene_text("{" + fluid + R"(, "rigid_bodies": [{"name": "b", "size": [0.2, 0.1, 0.3],
+    "position": [0.5, 0.5, 0.5]}]})", "box.json");
+  // The box's lattice 10 x 5 x 15 at 0.02 m; h = 0.04: the cells 2 or more from every face along
+  // each axis, 6 x 1 x 11, lie deeper than h. Its grid: floor(edge / 0.04) + 1 cells per axis,
+  // 6 x 3 x 8.
+  const ShapeDims dims = body_shape_def(with_box.rigid_bodies[0]);
+  EXPECT_EQ(fluid_body::sample_body_boundary(with_box.rigid_bodies[0], nullptr, 0.02, 0.04).sites.size(), 684u);
+  EXPECT_EQ(fluid_body::boundary_site_bound(dims, mass_properties(dims).extent, 0.02, 0.04), 684.0);
+  const std::uint64_t expected = 684 * kBoundaryBytesPerSite + 144 * kBoundaryBytesPerCell +
+                                 1000 * kCouplingBytesPerFluidParticle;  // 1000 fluid particles
+  EXPECT_EQ(estimate_scene_memory(with_box).total(), estimate_scene_memory(plain).total() + expected);
+  // A sphere's bound holds its sites, and is within 3 times of them.
+  const SceneDef with_ball = load_scene_text("{" + fluid + R"(, "rigid_bodies": [{"name": "b", "shape": "sphere",
+    "radius": 0.15, "position": [0.5, 0.5, 0.5]}]})", "ball.json");
+  const ShapeDims ball = body_shape_def(with_ball.rigid_bodies[0]);
+  const double ball_sites =
+      double(fluid_body::sample_body_boundary(with_ball.rigid_bodies[0], nullptr, 0.02, 0.04).sites.size());
+  const double ball_bound = fluid_body::boundary_site_bound(ball, mass_properties(ball).extent, 0.02, 0.04);
+  EXPECT_GE(ball_bound, ball_sites);
+  EXPECT_LE(ball_bound, 3.0 * ball_sites);
+
+  // A mesh body: its field's samples, as built.
+  std::vector<Vec3d> box;
+  Triangles outward;
+  box_mesh({0, 0, 0}, {0.1, 0.2, 0.1}, box, outward);
+  const fs::path obj = write_obj("fluidbody_memory_box", box, outward);
+  const SceneDef with_mesh = load_scene_text("{" + fluid + fmt::format(R"(, "rigid_bodies": [{{"name": "m", "shape": "mesh",
+    "mesh": {{"file": "{}"}}, "position": [0.5, 0.5, 0.5]}}]}})", obj.generic_string()), "mesh.json");
+  fs::remove(obj);
+  const MemoryEstimate mesh_estimate = estimate_scene_memory(with_mesh);
+  // The item of `path` whose description holds `what`.
+  const auto item = [](const MemoryEstimate& e, const std::string& path,
+                       const std::string& what = "") -> const MemoryEstimate::Item* {
+    for (const MemoryEstimate::Item& i : e.items)
+      if (i.json_path == path && i.what.find(what) != std::string::npos) return &i;
+    return nullptr;
+  };
+  const MemoryEstimate::Item* field = item(mesh_estimate, "rigid_bodies[0].mesh.file");
+  ASSERT_NE(field, nullptr);
+  const kernels::SdfGrid& grid = body_mesh_sdf(with_mesh.rigid_bodies[0], 0)->grid;
+  EXPECT_EQ(field->bytes, 8u * std::uint64_t(grid.dims[0]) * std::uint64_t(grid.dims[1]) * std::uint64_t(grid.dims[2]));
+  ASSERT_NE(item(mesh_estimate, "rigid_bodies[0].mesh.scale"), nullptr);  // its boundary
+
+  // A shape in the fluid: 16 bytes per particle and 44 per pair, 2 x 4/3 pi 2^3 = 67 pairs each.
+  const SceneDef with_shape = load_scene_text("{" + fluid + R"(, "shapes": [{"box": {"min": [0.5, 0.5, 0.5],
+    "max": [0.6, 0.6, 0.6]}, "spacing": 0.02}]})", "shape.json");
+  const MemoryEstimate::Item* pairs = item(estimate_scene_memory(with_shape), "shapes[0].spacing", "fluid pairs");
+  ASSERT_NE(pairs, nullptr);
+  const double shape_particles = double(shape_site_count(with_shape.shapes[0]));
+  EXPECT_NEAR(double(pairs->bytes), shape_particles * (16.0 + 44.0 * 2.0 * 4.0 / 3.0 * std::numbers::pi * 8.0), 1.0);
+
+  // A 1.6 m box at 0.01 m (its lattice of 4.1M points is under the loader's bound): 300k sites and
+  // 531k grid cells, 22 MB, over a limit of 40 MiB with the process's share; refused naming the
+  // box's size.
+  const SceneDef big = load_scene_text(R"({"domain": {"min": [0, 0, 0], "max": [2, 2, 2]},
+    "fluids": [{"box": {"min": [0, 0, 0], "max": [0.1, 0.1, 0.1]}, "spacing": 0.01}],
+    "rigid_bodies": [{"name": "slab", "size": [1.6, 1.6, 1.6], "position": [1, 1, 1]}]})", "big.json");
+  try {
+    check_scene_memory(big, "big.json", std::uint64_t(40) << 20);
+    ADD_FAILURE() << "a boundary over the memory limit was accepted";
+  } catch (const SceneError& e) {
+    EXPECT_EQ(e.json_path(), "rigid_bodies[0].size");
+    EXPECT_NE(e.problem().find("fluid boundary"), std::string::npos) << e.what();
+  }
 }
 
 // The bodies' grid of the fluid-body passes (body_grid.hpp): for points all over and around a
