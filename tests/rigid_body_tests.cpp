@@ -16,7 +16,8 @@
 // a box body, the momentum of a sheet thrown at a free ball, a shape on a mesh body, threads and
 // checkpoints (scenes/cloth_over_box.json). Bodies in fluid, two-way: buoyancy (float at the
 // density ratio, sink when denser), no fluid inside a moving body, threads and checkpoints, a body
-// too large for the fluid's spacing refused.
+// too large for the fluid's spacing refused; the boundary (bodies' and shapes') in the density
+// error row and in XSPH viscosity (no-slip at their walls), and in the memory estimate.
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
