@@ -265,6 +265,29 @@ void FluidBodyFamily::apply_viscosity() {
   float* vx = store_.vx.data();
   float* vy = store_.vy.data();
   float* vz = store_.vz.data();
+  // The pair's weight psi_b W(|x_i - x_b|), the same bits from either side.
+  const auto shape_weight = [&](std::uint32_t i, std::uint32_t b, double psi) {
+    const float rx = x[i] - x[b], ry = y[i] - y[b], rz = z[i] - z[b];
+    return psi * double(kernel.poly6(rx * rx + ry * ry + rz * rz));
+  };
+  // The shape particles' reaction, from the velocities before this pass, so that each pair keeps
+  // its momentum (m dv_i + m_b dv_b = 0): dv_b = -w_b m c sum_{pairs of b} psi_b W (v_b - v_i).
+  if (shapes_) {
+    const double scale = -double(prm.mass) * c;
+    shape_dv_.resize(shapes_->shape_count());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, shapes_->shape_count(), 64), [&](const auto& range) {
+      for (std::size_t g = range.begin(); g != range.end(); ++g) {
+        const std::uint32_t b = shapes_->shape_particle(g);
+        const Vec3d vb{vx[b], vy[b], vz[b]};
+        Vec3d push;
+        shapes_->for_each_pair_of_shape(g, [&](std::uint32_t i, double psi) {
+          const double w = shape_weight(i, b, psi);
+          if (w > 0.0) push += w * (vb - Vec3d{vx[i], vy[i], vz[i]});
+        });
+        shape_dv_[g] = (scale * double(store_.w[b])) * push;
+      }
+    });
+  }
   build_grid(false);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const auto& range) {
     for (std::size_t i = range.begin(); i != range.end(); ++i) {
@@ -281,8 +304,7 @@ void FluidBodyFamily::apply_viscosity() {
       });
       if (shapes_)
         shapes_->for_each_pair_of(i, [&](std::uint32_t b, double psi) {
-          const float rx = x[i] - x[b], ry = y[i] - y[b], rz = z[i] - z[b];
-          const double w = psi * double(kernel.poly6(rx * rx + ry * ry + rz * rz));
+          const double w = shape_weight(std::uint32_t(i), b, psi);
           if (!(w > 0.0)) return;
           pull += w * (Vec3d{vx[b], vy[b], vz[b]} - v);
           near = true;
@@ -290,6 +312,13 @@ void FluidBodyFamily::apply_viscosity() {
       if (!near) continue;
       const Vec3d after = v + c * pull;
       vx[i] = float(after.x), vy[i] = float(after.y), vz[i] = float(after.z);
+    }
+  });
+  if (!shapes_) return;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, shapes_->shape_count(), 256), [&](const auto& range) {
+    for (std::size_t g = range.begin(); g != range.end(); ++g) {
+      const std::uint32_t b = shapes_->shape_particle(g);
+      vx[b] += float(shape_dv_[g].x), vy[b] += float(shape_dv_[g].y), vz[b] += float(shape_dv_[g].z);
     }
   });
 }

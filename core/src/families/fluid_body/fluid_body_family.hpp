@@ -28,9 +28,10 @@
 //       v_i += c sum_b psi_b (v_b - v_i) W(|x_i - x_b|)
 //     so fluid at a body's wall is pulled toward the wall's velocity (no-slip, as XSPH pulls it
 //     toward its fluid neighbours'). It reads v_i as the fluid's XSPH left it (split, not one
-//     Jacobi sum) and changes only the fluid: the bodies and shapes get no reaction (their
-//     drag comes from the density constraint and the separation). Vorticity confinement does
-//     not see the boundary.
+//     Jacobi sum). A shape particle gets the pair's reaction, from the velocities before the
+//     pass, dv_b = -w_b m c sum_i psi_b W (v_b - v_i) (each pair keeps its momentum); a body gets
+//     none (its drag comes from the density constraint and the separation). Vorticity
+//     confinement does not see the boundary.
 //   "fluid-body separation" (after the joints and the body contacts): a fluid particle whose
 //     ball (radius s/2) reaches depth d into a body's solid along normal n (the solid's shape
 //     query of body_solid.hpp in the body frame) is a contact:
@@ -100,6 +101,7 @@ class FluidBodyFamily final : public Family {
   fluid_body::BodyGrid grid_;  // which bodies a particle may reach (body_grid.hpp)
   std::vector<rigid::Vec3d> centres_;
   std::vector<double> reaches_;
+  std::vector<rigid::Vec3d> shape_dv_;  // per shape particle with pairs: its viscosity reaction
 };
 
 }  // namespace seiche

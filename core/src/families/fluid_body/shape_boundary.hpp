@@ -57,6 +57,16 @@ class ShapeBoundary {
     }
   }
 
+  /// The shape particles with pairs this substep, shape-major: g in [0, shape_count()) is store
+  /// index shape_particle(g); for_each_pair_of_shape(g, visit) calls visit(fluid particle j, psi_b)
+  /// for its pairs, in pair order.
+  std::size_t shape_count() const { return shape_particle_.size(); }
+  std::uint32_t shape_particle(std::size_t g) const { return shape_particle_[g]; }
+  template <class Visit>
+  void for_each_pair_of_shape(std::size_t g, Visit&& visit) const {
+    for (std::uint32_t e = shape_start_[g]; e < shape_start_[g + 1]; ++e) visit(pair_fluid_[e], pair_psi_[e]);
+  }
+
   bool empty() const { return shape_particle_.empty(); }
   /// psi_b of shape particle with id `id` (m^3).
   double volume(std::int32_t id) const { return psi_[std::size_t(id - first_id_)]; }
