@@ -979,6 +979,21 @@ TEST(Cli, SceneOverTheMemoryLimitIsRefusedWithItsEstimate) {
   EXPECT_EQ(big.err.find("bad_alloc"), std::string::npos) << big.err;
 }
 
+// A body whose fluid boundary is over --max-memory (a 1.6 m box sampled at the fluid's 0.01 m:
+// 300k sites, 22 MB with its grid) is refused before it is sampled: exit 2, naming the file and
+// the box's size, nothing written.
+TEST(Cli, BodyBoundaryOverTheMemoryLimitIsRefusedNamingTheBody) {
+  const fs::path scene = write_scene("big_boundary.json", R"({"domain": {"min": [0, 0, 0], "max": [2, 2, 2]},
+    "fluids": [{"box": {"min": [0, 0, 0], "max": [0.1, 0.1, 0.1]}, "spacing": 0.01}],
+    "rigid_bodies": [{"name": "slab", "size": [1.6, 1.6, 1.6], "position": [1, 1, 1]}]})");
+  const fs::path out = fresh_dir("out_big_boundary");
+  const Result r = seiche("run " + q(scene) + " --frames 1 --max-memory 40M --out " + q(out));
+  EXPECT_EQ(r.code, 2) << r.err;
+  for (const char* s : {"big_boundary.json", "rigid_bodies[0].size", "fluid boundary", "--max-memory limit of 40 MiB"})
+    EXPECT_NE(r.err.find(s), std::string::npos) << s << " missing from: " << r.err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
 // substeps 10000 x iterations 10000 (1e8 solver iterations per frame, past the bound of 1e5) is
 // refused naming solver.substeps; --allow-huge-work runs it (here 1000 x 101, a fraction of a
 // second for two particles).

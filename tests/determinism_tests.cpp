@@ -235,6 +235,9 @@ TEST(Golden, StackAfter120Frames) {
 // boxes are in the water from frame 15), shapes and fluid (soft_in_water), and every material
 // (ragdoll_in_cloth). Fused by the native AVX-512 build, unfused by the x86-64 build (the
 // bodies-only hinge door gives the same bits in both; the others have fluid or cloth kernels).
+// boxes_in_water, soft_in_water and ragdoll_in_cloth were recomputed (fused, native AVX-512
+// build) after XSPH viscosity took in the bodies' and shapes' boundary (no-slip at their walls).
+// TODO unfused: their unfused values are still the old ones, to be recomputed by an x86-64 build.
 TEST(Golden, ClothOverBoxAfter60Frames) {
   expect_golden({"cloth_over_box.json", 60, 0x1f714e6d6f580a34ull, 0x7168b67abcb21b2cull, HashedState::ParticlesAndBodies});
 }
@@ -242,13 +245,13 @@ TEST(Golden, HingeDoorAfter120Frames) {
   expect_golden({"hinge_door.json", 120, 0x96d4b25569703b8aull, 0x96d4b25569703b8aull, HashedState::Bodies});
 }
 TEST(Golden, BoxesInWaterAfter20Frames) {
-  expect_golden({"boxes_in_water.json", 20, 0xd3f028ef663252b1ull, 0x45797036883b9274ull, HashedState::ParticlesAndBodies});
+  expect_golden({"boxes_in_water.json", 20, 0x6ba90bf6e63ca8ceull, 0x45797036883b9274ull, HashedState::ParticlesAndBodies});  // TODO unfused
 }
 TEST(Golden, SoftInWaterAfter20Frames) {
-  expect_golden({"soft_in_water.json", 20, 0xd83bada229e4954full, 0x805299a48c7e0848ull});
+  expect_golden({"soft_in_water.json", 20, 0x142a27f1a1401a13ull, 0x805299a48c7e0848ull});  // TODO unfused
 }
 TEST(Golden, RagdollInClothAfter30Frames) {
-  expect_golden({"ragdoll_in_cloth.json", 30, 0xd434f7f98d3fed57ull, 0x06c63b8af8614821ull, HashedState::ParticlesAndBodies});
+  expect_golden({"ragdoll_in_cloth.json", 30, 0x887a905ed4bcf3b2ull, 0x06c63b8af8614821ull, HashedState::ParticlesAndBodies});  // TODO unfused
 }
 
 // The golden values' premise: a build whose instruction set has FMA fuses its multiply-adds (else

@@ -22,6 +22,15 @@
 //   shapes           20 bytes per cluster member (index, rest offset, mass share), one per particle;
 //                    48 per member of region clusters, (2 + 1/h)^3 per particle at half-width h
 //   mesh colliders   the signed distance field, 8 bytes per sample (at most 2^26 samples)
+//   mesh bodies      the body's signed distance field (a voxel of 1/64 of its largest extent, a
+//                    band of 4 voxels), 8 bytes per sample
+//   fluid coupling   where the fluid meets bodies or shapes (families/fluid_body/): per body, its
+//                    boundary sites (fluid_body::boundary_site_bound) at kBoundaryBytesPerSite
+//                    and its grid's cells of h over the solid's width per axis
+//                    (fluid_body::boundary_grid_cell_bound) at kBoundaryBytesPerCell; per shape particle kShapeBoundaryBytesPerParticle and
+//                    its fluid pairs at the fluid's neighbor bound (2 x 4/3 pi kernel_radius^3)
+//                    at kFluidShapeBytesPerPair; per fluid particle kCouplingBytesPerFluidParticle
+//                    (and kFluidShapeBytesPerFluidParticle with shapes)
 //   process          kProcessBytes (code, libraries, thread pools)
 #pragma once
 
@@ -41,6 +50,20 @@ inline constexpr std::uint64_t kVtpExportBytesPerParticle = 36;
 inline constexpr std::uint64_t kClothBytesPerVertex = 550;
 inline constexpr std::uint64_t kClothBytesPerTriangle = 300;
 inline constexpr std::uint64_t kSelfContactBytesPerVertex = 900;
+/// A body's boundary site: its body-frame position (24) and volume (8), the sampled copy before
+/// the grid sort (24) and the sort's cursor (4).
+inline constexpr std::uint64_t kBoundaryBytesPerSite = 60;
+/// A cell of a body's boundary grid: its start and the sort's cursor.
+inline constexpr std::uint64_t kBoundaryBytesPerCell = 8;
+/// Per fluid particle with coupling: the boundary's (g_b, rho_b) (16) and the kept p_i (24), the
+/// error probe's rho_b (8) and its row (16).
+inline constexpr std::uint64_t kCouplingBytesPerFluidParticle = 64;
+/// Per fluid particle with shapes: the fluid-major pairs' start and the sort's cursor.
+inline constexpr std::uint64_t kFluidShapeBytesPerFluidParticle = 8;
+/// Per shape particle: its volume psi_b (8), its index and its pairs' start (8).
+inline constexpr std::uint64_t kShapeBoundaryBytesPerParticle = 16;
+/// Per fluid-shape pair: fluid and shape indices (8), psi (8), gradient (24), fluid-major entry (4).
+inline constexpr std::uint64_t kFluidShapeBytesPerPair = 44;
 /// Solver iterations (substeps x iterations, or max_iterations where density_tolerance lets a
 /// substep run that many) per frame: past this, float32 rounding noise dominates long before, and
 /// each iteration's fixed cost alone takes minutes per frame.

@@ -72,6 +72,7 @@ inline constexpr int kShapePlasticity = 20;   //   on the positions the substep 
 inline constexpr int kDamping = 0;           // Velocity
 inline constexpr int kVorticity = 10;
 inline constexpr int kViscosity = 20;
+inline constexpr int kFluidBodyViscosity = 21;  //   the bodies' and shapes' boundary in XSPH
 }  // namespace pass_order
 
 struct Pass {

@@ -11,6 +11,9 @@
 #include <numbers>
 
 #include "../families/cloth/cloth_mesh.hpp"
+#include "../families/fluid_body/body_boundary.hpp"
+#include "../families/rigid/body_mesh.hpp"
+#include "../families/rigid/body_shape.hpp"
 #include "../families/lattice.hpp"
 #include "../families/shape/shape_sites.hpp"
 #include "seiche/aligned_column.hpp"
@@ -56,6 +59,76 @@ std::uint64_t sdf_samples(const ColliderDef& c) {
   double samples = 1.0;
   for (int a = 0; a < 3; ++a) samples *= std::ceil((hi[a] - lo[a]) / voxel) + 10.0;  // + the 4-voxel band
   return std::uint64_t(std::min(samples, double(kMaxSdfSamples)));
+}
+
+// A mesh body's field (rigid/body_solid.cpp): a voxel of 1/64 of the body-frame mesh's largest
+// extent, a band of 4 voxels, as build_mesh_sdf lays it out.
+std::uint64_t body_sdf_samples(const rigid::BodyMesh& mesh) {
+  if (mesh.vertices.empty()) return 0;
+  rigid::Vec3d lo = mesh.vertices[0], hi = lo;
+  for (const rigid::Vec3d& v : mesh.vertices) {
+    lo = {std::min(lo.x, v.x), std::min(lo.y, v.y), std::min(lo.z, v.z)};
+    hi = {std::max(hi.x, v.x), std::max(hi.y, v.y), std::max(hi.z, v.z)};
+  }
+  const double span[3] = {hi.x - lo.x, hi.y - lo.y, hi.z - lo.z};
+  const double voxel = std::max(std::max({span[0], span[1], span[2]}) / 64.0, 1e-6);
+  double samples = 1.0;
+  for (const double a : span) samples *= std::max(1.0, std::ceil((a + 8.0 * voxel) / voxel * (1.0 - 1e-6))) + 1.0;
+  return std::uint64_t(std::min(samples, double(kMaxSdfSamples)));
+}
+
+// The key that sizes body `def`: its size for a box, its radius for a sphere or a capsule, its
+// mesh's scale.
+const char* body_size_key(const RigidBodyDef& def) {
+  switch (rigid::body_shape_of(def.shape)) {
+    case rigid::BodyShape::Box: return "size";
+    case rigid::BodyShape::Mesh: return "mesh.scale";
+    default: return "radius";
+  }
+}
+
+// The coupling of the fluid with rigid bodies and shapes (families/fluid_body/): the bodies'
+// boundary sites and their grids, the bodies' mesh fields, the fluid-shape pairs and the per-fluid
+// particle arrays.
+void add_fluid_coupling(const SceneDef& scene, MemoryEstimate& e) {
+  for (std::size_t k = 0; k < scene.rigid_bodies.size(); ++k) {
+    const RigidBodyDef& def = scene.rigid_bodies[k];
+    if (def.loaded_mesh && rigid::body_shape_of(def.shape) == rigid::BodyShape::Mesh) {
+      const std::uint64_t samples = body_sdf_samples(*def.loaded_mesh);
+      e.items.push_back({fmt::format("rigid_bodies[{}].mesh.file", k),
+                         fmt::format("rigid_bodies[{}] (distance field of {} samples)", k, samples),
+                         samples * kSdfBytesPerSample});
+    }
+  }
+  if (scene.fluids.empty() || (scene.rigid_bodies.empty() && scene.shapes.empty())) return;
+  const FluidDef& fluid = scene.fluids[0];
+  const double spacing = fluid.spacing, h = double(fluid.kernel_radius) * spacing;
+  for (std::size_t k = 0; k < scene.rigid_bodies.size(); ++k) {
+    const RigidBodyDef& def = scene.rigid_bodies[k];
+    if (rigid::body_shape_of(def.shape) == rigid::BodyShape::Mesh && !def.loaded_mesh) continue;  // not read yet
+    const rigid::ShapeDims dims = rigid::body_shape_def(def);
+    const double extent = rigid::mass_properties(dims).extent;
+    const double sites = fluid_body::boundary_site_bound(dims, extent, spacing, h);
+    const double cells = fluid_body::boundary_grid_cell_bound(dims, extent, h);
+    const double bytes = sites * double(kBoundaryBytesPerSite) + cells * double(kBoundaryBytesPerCell);
+    e.items.push_back({fmt::format("rigid_bodies[{}].{}", k, body_size_key(def)),
+                       fmt::format("rigid_bodies[{}] (fluid boundary, at most {:.0f} sites)", k, sites),
+                       std::uint64_t(std::min(bytes, 1.8e19))});
+  }
+  const double neighbors = 2.0 * 4.0 / 3.0 * std::numbers::pi * std::pow(double(fluid.kernel_radius), 3.0);
+  for (std::size_t k = 0; k < scene.shapes.size(); ++k) {
+    const double particles = double(shape_site_count(scene.shapes[k]));
+    const double bytes = particles * (double(kShapeBoundaryBytesPerParticle) + neighbors * double(kFluidShapeBytesPerPair));
+    e.items.push_back({fmt::format("shapes[{}].spacing", k),
+                       fmt::format("shapes[{}] (fluid pairs, at most {:.0f})", k, particles * neighbors),
+                       std::uint64_t(bytes)});
+  }
+  std::uint64_t fluid_particles = 0;
+  for (const FluidDef& f : scene.fluids) fluid_particles += lattice_size(f.box, f.spacing);
+  e.items.push_back({"fluids[0].spacing",
+                     fmt::format("fluid boundary per fluid particle ({} particles)", fluid_particles),
+                     fluid_particles * (kCouplingBytesPerFluidParticle +
+                                        (scene.shapes.empty() ? 0 : kFluidShapeBytesPerFluidParticle))});
 }
 
 }  // namespace
@@ -137,6 +210,7 @@ MemoryEstimate estimate_scene_memory(const SceneDef& scene) {
                        fmt::format("shapes[{}] ({:.0f} cluster members)", k, members),
                        std::uint64_t(members * double(regions ? kRegionBytesPerMember : kShapeBytesPerMember))});
   }
+  add_fluid_coupling(scene, e);
   for (std::size_t k = 0; k < scene.colliders.size(); ++k) {
     const std::uint64_t samples = sdf_samples(scene.colliders[k]);
     if (samples > 0)

@@ -35,6 +35,16 @@ FluidError FluidErrorProbe::measure(const ParticleStore& store) {
     for (std::size_t k = r.begin(); k != r.end(); ++k) packed_[k] = {x_[k], y_[k], z_[k], 0.0f};
   });
   density_.resize(fluid), lambda_.resize(fluid);
+  if (boundary_) {  // the constraint's rho_i: its gradient part is not needed for the density
+    boundary_density_.assign(fluid, 0.0);
+    boundary_(Positions{nb.grid, x_.data(), y_.data(), z_.data(), order, fluid}, boundary_density_.data());
+    boundary_rows_.resize(fluid);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, fluid, 8192), [&](const auto& r) {
+      for (std::size_t k = r.begin(); k != r.end(); ++k)
+        boundary_rows_[k] = {0.0f, 0.0f, 0.0f, float(boundary_density_[k])};
+    });
+    params_.boundary = boundary_rows_.data();
+  }
   kernels::pbf_density_lambda(packed_.data(), nb.span(), fluid, params_, density_.data(),
                               lambda_.data());
   return density_error(density_.data(), fluid, params_.rest_density);

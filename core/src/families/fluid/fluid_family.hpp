@@ -13,6 +13,7 @@
 #include <functional>
 #include <memory>
 #include <span>
+#include <utility>
 
 #include "loop/family.hpp"
 #include "fluid_error_probe.hpp"
@@ -44,6 +45,11 @@ class FluidFamily final : public Family {
   bool votes_on_iterations() const override { return density_tolerance_ > 0.0f; }
   bool wants_iteration() const override;
   void measure(FrameMetrics& m) override;
+  /// The boundary (bodies, shapes) whose density the measured error includes, as the density
+  /// constraint does (fluid_error_probe.hpp); set by the coupling, none without.
+  void set_boundary_density(FluidErrorProbe::BoundaryDensity boundary) {
+    probe_->set_boundary_density(std::move(boundary));
+  }
 
  private:
   void find_neighbors();

@@ -42,6 +42,7 @@ class FluidSolver {
   float particle_radius() const { return particle_radius_; }
   bool has_viscosity() const { return viscosity_ > 0.0f; }
   bool has_vorticity() const { return vorticity_ > 0.0f; }
+  float viscosity() const { return viscosity_; }  ///< XSPH's c
 
   /// One Jacobi iteration of the density constraints on the predicted positions. With
   /// `measure_error`, also the mean density error of those positions before the correction

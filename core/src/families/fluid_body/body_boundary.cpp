@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <string>
 
 #include "families/rigid/body_shape.hpp"
@@ -51,6 +52,45 @@ double boundary_lattice_size(const rigid::ShapeDims& dims, double extent, double
            std::max(1.0, std::round(dims.size.z / spacing));
   const double side = 2.0 * std::ceil(extent / spacing);
   return side * side * side;
+}
+
+double boundary_site_bound(const rigid::ShapeDims& dims, double extent, double spacing, double h) {
+  const double lattice = boundary_lattice_size(dims, extent, spacing);
+  constexpr double pi = std::numbers::pi;
+  // The solid's volume grown (or shrunk, r < 0: none) to radius r: a ball, or a capsule's.
+  const auto round_volume = [&](double r) {
+    if (!(r > 0.0)) return 0.0;
+    return 4.0 / 3.0 * pi * r * r * r + (dims.shape == rigid::BodyShape::Capsule ? pi * r * r * dims.length : 0.0);
+  };
+  double sites = lattice;
+  if (dims.shape == rigid::BodyShape::Box) {
+    // Along each axis, the cells whose centres (i + 1/2) step lie deeper than h from both faces.
+    double interior = 1.0;
+    for (int a = 0; a < 3; ++a) {
+      const double size = component(dims.size, a);
+      const double n = std::max(1.0, std::round(size / spacing)), step = size / n;
+      const double first = std::ceil(h / step - 0.5), last = std::floor(n - 0.5 - h / step);
+      interior *= std::max(0.0, last - first + 1.0);
+    }
+    sites = lattice - interior;
+  } else if (dims.shape != rigid::BodyShape::Mesh) {
+    const double d = 0.5 * std::sqrt(3.0) * spacing;
+    const double shell = round_volume(dims.radius + d) - round_volume(dims.radius - h - d);
+    sites = std::min(lattice, std::ceil(shell / (spacing * spacing * spacing)));
+  }
+  return std::max(1.0, sites);
+}
+
+double boundary_grid_cell_bound(const rigid::ShapeDims& dims, double extent, double h) {
+  double cells = 1.0;
+  for (int a = 0; a < 3; ++a) {
+    double width = 2.0 * extent;
+    if (dims.shape == rigid::BodyShape::Box) width = component(dims.size, a);
+    if (dims.shape == rigid::BodyShape::Sphere) width = 2.0 * dims.radius;
+    if (dims.shape == rigid::BodyShape::Capsule) width = 2.0 * dims.radius + (a == 1 ? dims.length : 0.0);
+    cells *= std::floor(width / h) + 1.0;
+  }
+  return cells;
 }
 
 BodyBoundary sample_body_boundary(const RigidBodyDef& def, std::shared_ptr<const MeshSdf> field, double spacing,

@@ -72,6 +72,18 @@ struct BodyBoundary {
 double boundary_lattice_size(const rigid::ShapeDims& dims, double extent, double spacing);
 inline constexpr double kMaxBoundaryLattice = 4.0e6 * 4.0;
 
+/// At most how many sites sample_body_boundary keeps for a body of shape `dims` (the memory
+/// estimate's count, from the definition alone): a box's exactly (its lattice less the cells
+/// whose centres lie deeper than h from every face); a sphere's or a capsule's the lattice cells
+/// that fit in its shell of depth h grown by a cell's half-diagonal d on both sides,
+/// V_shell(r + d) - V_shell(r - h - d) over s^3 (a kept site's cell lies in that shell), at most
+/// the lattice; a mesh's its lattice. At least 1 (a body smaller than a cell has its centre).
+double boundary_site_bound(const rigid::ShapeDims& dims, double extent, double spacing, double h);
+/// At most how many cells the grid of such a body's sites has: floor(w_a / h) + 1 per axis, w_a
+/// the solid's width along it (a box's edge, a sphere's 2r, a capsule's 2r or 2r + length, a
+/// mesh's 2 extent), which the sites' box does not exceed.
+double boundary_grid_cell_bound(const rigid::ShapeDims& dims, double extent, double h);
+
 /// The boundary of body `def` for a fluid of spacing `spacing` and kernel radius `h` (m); `field`
 /// is a mesh body's field (rigid::BodyMeshFields), null for the other shapes.
 BodyBoundary sample_body_boundary(const RigidBodyDef& def, std::shared_ptr<const MeshSdf> field, double spacing,

@@ -8,9 +8,11 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
+#include "families/fluid/fluid_ball_query.hpp"
 #include "families/rigid/body_correction.hpp"
 #include "seiche/kernels/blocked_reduce.hpp"
 #include "seiche/kernels/sph_kernels.hpp"
+#include "seiche/phase.hpp"
 
 namespace seiche {
 
@@ -96,6 +98,8 @@ FluidBodyFamily::FluidBodyFamily(const SceneDef& scene, ParticleStore& store, Fl
     boundaries_.push_back(
         fluid_body::sample_body_boundary(scene.rigid_bodies[k], rigid->body_mesh_fields().get(k), spacing, h));
   if (!scene.shapes.empty()) shapes_ = std::make_unique<fluid_body::ShapeBoundary>(scene, first_shape_id, h);
+  fluid.set_boundary_density(
+      [this](const FluidErrorProbe::Positions& at, double* density) { measured_boundary_density(at, density); });
 }
 
 void FluidBodyFamily::add_passes(std::vector<Pass>& passes) {
@@ -106,6 +110,9 @@ void FluidBodyFamily::add_passes(std::vector<Pass>& passes) {
                     [this](const StepContext&) { gather_boundary(); }});
   passes.push_back({"fluid-body density", Stage::Iterate, pass_order::kFluidBodyDensity, true,
                     [this](const StepContext&) { solve_density(); }});
+  if (fluid_.solver().has_viscosity())
+    passes.push_back({"fluid-body viscosity", Stage::Velocity, pass_order::kFluidBodyViscosity, true,
+                      [this](const StepContext&) { apply_viscosity(); }});
   if (rigid_ == nullptr) return;  // shapes only: their contacts with the fluid are particle contacts
   passes.push_back({"fluid-body separation", Stage::Iterate, pass_order::kFluidBodySeparation, true,
                     [this](const StepContext&) { separate(); }});
@@ -177,6 +184,37 @@ void FluidBodyFamily::gather_boundary() {
   fluid_.solver().set_boundary(boundary_.data());
 }
 
+void FluidBodyFamily::measured_boundary_density(const FluidErrorProbe::Positions& at, double* density) {
+  const kernels::PbfParams& prm = fluid_.solver().params();
+  const kernels::SphKernel kernel(prm.h);
+  const double rho0 = prm.rest_density;
+  if (rigid_ != nullptr) {
+    build_grid(false);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, at.fluid, 4096), [&](const auto& range) {
+      for (std::size_t k = range.begin(); k != range.end(); ++k) {
+        double sum = 0.0;
+        for_each_site(Vec3d{at.x[k], at.y[k], at.z[k]}, [&](std::size_t body, std::uint32_t s, Vec3d r) {
+          sum += rho0 * boundaries_[body].psi[s] * double(kernel.poly6(float(dot(r, r))));
+        });
+        density[k] += sum;
+      }
+    });
+  }
+  if (!shapes_) return;
+  // Shape particle by shape particle in the probe's order (serial: each adds to its fluid neighbours).
+  for (std::size_t k = at.fluid; k < at.order.size(); ++k) {
+    const std::uint32_t i = at.order[k];
+    if (phase_material(store_.phase[i]) != Material::Shape) continue;
+    const float xb = at.x[k], yb = at.y[k], zb = at.z[k];
+    if (!std::isfinite(xb) || !std::isfinite(yb) || !std::isfinite(zb)) continue;
+    const double psi = shapes_->volume(store_.id[i]);
+    for_each_fluid_particle_within(at.grid, at.x, at.y, at.z, xb, yb, zb, float(prm.h), [&](std::uint32_t j) {
+      const float rx = at.x[j] - xb, ry = at.y[j] - yb, rz = at.z[j] - zb;
+      density[j] += rho0 * psi * double(kernel.poly6(rx * rx + ry * ry + rz * rz));
+    });
+  }
+}
+
 void FluidBodyFamily::solve_density() {
   const kernels::PbfParams& prm = fluid_.solver().params();
   const kernels::SphKernel kernel(prm.h);
@@ -212,6 +250,76 @@ void FluidBodyFamily::solve_density() {
     });
     flush();
     px[i] += float(dp.x), py[i] += float(dp.y), pz[i] += float(dp.z);
+  });
+}
+
+void FluidBodyFamily::apply_viscosity() {
+  const kernels::PbfParams& prm = fluid_.solver().params();
+  const kernels::SphKernel kernel(prm.h);
+  const double c = fluid_.solver().viscosity();
+  const std::size_t n = fluid_.neighborhood().count();
+  const std::vector<RigidBody>& bodies = this->bodies();
+  const float* x = store_.x.data();
+  const float* y = store_.y.data();
+  const float* z = store_.z.data();
+  float* vx = store_.vx.data();
+  float* vy = store_.vy.data();
+  float* vz = store_.vz.data();
+  // The pair's weight psi_b W(|x_i - x_b|), the same bits from either side.
+  const auto shape_weight = [&](std::uint32_t i, std::uint32_t b, double psi) {
+    const float rx = x[i] - x[b], ry = y[i] - y[b], rz = z[i] - z[b];
+    return psi * double(kernel.poly6(rx * rx + ry * ry + rz * rz));
+  };
+  // The shape particles' reaction, from the velocities before this pass, so that each pair keeps
+  // its momentum (m dv_i + m_b dv_b = 0): dv_b = -w_b m c sum_{pairs of b} psi_b W (v_b - v_i).
+  if (shapes_) {
+    const double scale = -double(prm.mass) * c;
+    shape_dv_.resize(shapes_->shape_count());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, shapes_->shape_count(), 64), [&](const auto& range) {
+      for (std::size_t g = range.begin(); g != range.end(); ++g) {
+        const std::uint32_t b = shapes_->shape_particle(g);
+        const Vec3d vb{vx[b], vy[b], vz[b]};
+        Vec3d push;
+        shapes_->for_each_pair_of_shape(g, [&](std::uint32_t i, double psi) {
+          const double w = shape_weight(i, b, psi);
+          if (w > 0.0) push += w * (vb - Vec3d{vx[i], vy[i], vz[i]});
+        });
+        shape_dv_[g] = (scale * double(store_.w[b])) * push;
+      }
+    });
+  }
+  build_grid(false);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const auto& range) {
+    for (std::size_t i = range.begin(); i != range.end(); ++i) {
+      const Vec3d p{x[i], y[i], z[i]}, v{vx[i], vy[i], vz[i]};
+      Vec3d pull;  // sum_b psi_b (v_b - v_i) W
+      bool near = false;
+      for_each_site(p, [&](std::size_t k, std::uint32_t s, Vec3d r) {
+        const double w = boundaries_[k].psi[s] * double(kernel.poly6(float(dot(r, r))));
+        if (!(w > 0.0)) return;
+        const RigidBody& b = bodies[k];
+        const Vec3d site_velocity = b.v + cross(b.omega, rotate(b.q, boundaries_[k].sites[s]));
+        pull += w * (site_velocity - v);
+        near = true;
+      });
+      if (shapes_)
+        shapes_->for_each_pair_of(i, [&](std::uint32_t b, double psi) {
+          const double w = shape_weight(std::uint32_t(i), b, psi);
+          if (!(w > 0.0)) return;
+          pull += w * (Vec3d{vx[b], vy[b], vz[b]} - v);
+          near = true;
+        });
+      if (!near) continue;
+      const Vec3d after = v + c * pull;
+      vx[i] = float(after.x), vy[i] = float(after.y), vz[i] = float(after.z);
+    }
+  });
+  if (!shapes_) return;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, shapes_->shape_count(), 256), [&](const auto& range) {
+    for (std::size_t g = range.begin(); g != range.end(); ++g) {
+      const std::uint32_t b = shapes_->shape_particle(g);
+      vx[b] += float(shape_dv_[g].x), vy[b] += float(shape_dv_[g].y), vz[b] += float(shape_dv_[g].z);
+    }
   });
 }
 

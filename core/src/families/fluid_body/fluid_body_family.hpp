@@ -22,11 +22,25 @@
 //       dp_i = lambda_i g_b,i   (the boundary's part of lambda_i grad_{p_i} C_i)
 //     and each site's share, -m lambda_i psi_b grad W(p_i - x_b) at the kept p_i, is an impulse
 //     on its body at x_b: the pair's momentum is kept exactly.
+//   "fluid-body viscosity" (velocity stage, after the fluid's XSPH, where the fluid has a
+//     viscosity c): the boundary particles in XSPH, with the boundary's velocity at each site
+//     (a body's v + omega x (x_b - x_body); a shape particle's own velocity):
+//       v_i += c sum_b psi_b (v_b - v_i) W(|x_i - x_b|)
+//     so fluid at a body's wall is pulled toward the wall's velocity (no-slip, as XSPH pulls it
+//     toward its fluid neighbours'). It reads v_i as the fluid's XSPH left it (split, not one
+//     Jacobi sum). A shape particle gets the pair's reaction, from the velocities before the
+//     pass, dv_b = -w_b m c sum_i psi_b W (v_b - v_i) (each pair keeps its momentum); a body gets
+//     none (its drag comes from the density constraint and the separation). Vorticity
+//     confinement does not see the boundary.
 //   "fluid-body separation" (after the joints and the body contacts): a fluid particle whose
 //     ball (radius s/2) reaches depth d into a body's solid along normal n (the solid's shape
 //     query of body_solid.hpp in the body frame) is a contact:
 //       dlambda = d / (1/m + w_body),  w_body = 1/M + (r x n)^T I^-1 (r x n),  r = p_i - x_body
 //       p_i += dlambda / m n,  the body gets the impulse -dlambda n at r
+// The run report's density error is of the same rho_i as the constraint's, boundary included: at
+// the end of a frame, the fluid's error probe asks this family for rho_b,i + rho_s,i at the final
+// positions (the bodies' sites at their poses then; the shape particles within h of each fluid
+// particle in the probe's grid, summed shape particle by shape particle in the probe's order).
 // Fluid particles write only their own positions (in parallel); the impulses on a body add up
 // per block of particles and the blocks in index order, then move the body once (linear part
 // through 1/M, angular through I^-1: body_correction.hpp), so the bits do not depend on the
@@ -63,6 +77,10 @@ class FluidBodyFamily final : public Family {
   void gather_boundary();
   void solve_density();
   void separate();
+  void apply_viscosity();
+  /// The boundary's density rho_b,k + rho_s,k of each fluid particle k of `at` (the error
+  /// probe's positions) into density[k].
+  void measured_boundary_density(const FluidErrorProbe::Positions& at, double* density);
   /// Calls visit(body k, site s, q - site) for every site within reach of world point p (q: p
   /// in body k's frame).
   template <class Visit>
@@ -83,6 +101,7 @@ class FluidBodyFamily final : public Family {
   fluid_body::BodyGrid grid_;  // which bodies a particle may reach (body_grid.hpp)
   std::vector<rigid::Vec3d> centres_;
   std::vector<double> reaches_;
+  std::vector<rigid::Vec3d> shape_dv_;  // per shape particle with pairs: its viscosity reaction
 };
 
 }  // namespace seiche

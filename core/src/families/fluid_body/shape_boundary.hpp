@@ -46,6 +46,27 @@ class ShapeBoundary {
   /// particles' reaction; `mass`: the fluid particle's mass.
   void solve(ParticleStore& store, std::size_t fluid_count, double mass) const;
 
+  /// Calls visit(shape particle b, psi_b) for fluid particle i's pairs of this substep, in pair
+  /// order.
+  template <class Visit>
+  void for_each_pair_of(std::size_t i, Visit&& visit) const {
+    if (i + 1 >= fluid_start_.size()) return;
+    for (std::uint32_t k = fluid_start_[i]; k < fluid_start_[i + 1]; ++k) {
+      const std::uint32_t e = fluid_pair_[k];
+      visit(pair_shape_[e], pair_psi_[e]);
+    }
+  }
+
+  /// The shape particles with pairs this substep, shape-major: g in [0, shape_count()) is store
+  /// index shape_particle(g); for_each_pair_of_shape(g, visit) calls visit(fluid particle j, psi_b)
+  /// for its pairs, in pair order.
+  std::size_t shape_count() const { return shape_particle_.size(); }
+  std::uint32_t shape_particle(std::size_t g) const { return shape_particle_[g]; }
+  template <class Visit>
+  void for_each_pair_of_shape(std::size_t g, Visit&& visit) const {
+    for (std::uint32_t e = shape_start_[g]; e < shape_start_[g + 1]; ++e) visit(pair_fluid_[e], pair_psi_[e]);
+  }
+
   bool empty() const { return shape_particle_.empty(); }
   /// psi_b of shape particle with id `id` (m^3).
   double volume(std::int32_t id) const { return psi_[std::size_t(id - first_id_)]; }
