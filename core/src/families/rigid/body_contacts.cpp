@@ -162,11 +162,12 @@ void BodyContacts::solve_pair(Active& pair, RigidBody& a, RigidBody& b) {
       pushed += pen.depth * n;
     }
     if (touches_.empty()) break;
-    // Shock propagation: the lower body of a vertical contact, resting, carries the upper.
+    // Shock propagation: the lower body of a vertical contact, resting, carries the upper, unless
+    // the upper is fixed (a slab pressing down on it): then the lower is the one to move.
     const double vertical = dot(normalized_or_zero(pushed), up_);
-    const int fixed = vertical > kSupportCosine && b_resting    ? kFixedB
-                      : vertical < -kSupportCosine && a_resting ? kFixedA
-                                                                : kNeither;
+    const int fixed = vertical > kSupportCosine && b_resting && !a.fixed()    ? kFixedB
+                      : vertical < -kSupportCosine && a_resting && !b.fixed() ? kFixedA
+                                                                              : kNeither;
     double deepest = 0.0;
     for (Touch& t : touches_) {
       const double w = pair_inverse_mass(a0, b0, t.r_a, t.r_b, t.normal, fixed);

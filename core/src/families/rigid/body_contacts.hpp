@@ -48,7 +48,9 @@
 //     carries what lands on it. Without it, the weight above reaches the floor only over many
 //     iterations: scenes/stack.json sank into itself (the top box by 0.95 mm) and drifted
 //     sideways by up to 3.5 mm in 10 s at the defaults (measured). A pair in the air, or side by
-//     side, keeps both masses: its momentum is conserved.
+//     side, keeps both masses: its momentum is conserved. Never against a fixed upper body: a
+//     resting body pressed up into a fixed slab keeps its mass (frozen, the pair had none, and
+//     the body went through the slab).
 // After the velocity update, per touching pair (the lower body again fixed where the positions
 // treated it so), with v_rel = (v_a + omega_a x r_a) - (v_b + omega_b x r_b) at each point:
 //   restitution: every point's normal speed change dv = -v_n + max(-e vbar_n, 0) at once (vbar_n
