@@ -75,9 +75,9 @@ void solve_particle_contacts(const ParticleView& p, const ParticleContacts& c, f
 }
 
 // The momentum-keeping contacts (particle_contacts.hpp, solve_sided_contacts): pass 1 per
-// particle i, its pairs' impulses lambda n (averaged over its active contacts) and its own
-// correction; pass 2 per partner j, the sum of its entries' reactions in its list's order;
-// pass 3 applies both. Reads before writes: no result depends on the thread count.
+// particle i, its pairs' impulses, normal and friction (averaged over its active contacts), and
+// its own correction; pass 2 per partner j, the sum of its entries' reactions in its list's
+// order; pass 3 applies both. Reads before writes: no result depends on the thread count.
 void solve_sided_contacts(const ParticleView& p, const SidedContacts& c, float friction, std::vector<float>& scratch) {
   const ParticleContacts& f = c.first;
   const std::size_t groups = f.size(), entries = f.partner.size(), partners = c.second.size();
