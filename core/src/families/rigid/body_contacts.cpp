@@ -116,7 +116,7 @@ void BodyContacts::find_pairs(const std::vector<RigidBody>& bodies) {
 void BodyContacts::solve_positions(std::vector<RigidBody>& bodies, const WorldContacts& world) {
   if (!pairs_found_) find_pairs(bodies);
   if (active_.empty()) return;
-  world.touched(resting_);
+  world.held_up(resting_, up_, kSupportCosine);
   for (std::size_t k = 0; k < bodies.size(); ++k) resting_[k] = resting_[k] || bodies[k].fixed();
   for (Active& pair : active_) solve_pair(pair, bodies[std::size_t(pair.a)], bodies[std::size_t(pair.b)]);
 }
