@@ -857,7 +857,7 @@ TEST(ParticleContacts, SidedContactsKeepEveryPairsMomentum) {
   c.second_entry = {0, 1, 2};
   c.second_start = {0, 1, 2, 3};
   std::vector<float> scratch;
-  solve_sided_contacts(p.view(), c, scratch);
+  solve_sided_contacts(p.view(), c, 0.0f, scratch);
   const double lambda = 0.04 / 3.0 / 2.0;
   EXPECT_NEAR(p.px[0], -1.0 * lambda, 1e-7);
   EXPECT_NEAR(p.py[0], -1.0 * lambda, 1e-7);
@@ -868,6 +868,36 @@ TEST(ParticleContacts, SidedContactsKeepEveryPairsMomentum) {
     const float* x = a == 0 ? p.px.data() : p.py.data();
     const double momentum = (x[0] - 0.0) / 1.0 + (x[1] - (a == 0 ? 0.06 : 0.0)) / 2.0 + (x[2] - (a == 0 ? 0.0 : 0.06)) / 2.0;
     EXPECT_NEAR(momentum, 0.0, 1e-8) << "axis " << a;
+  }
+}
+
+// Friction of the fluid-shape contacts: a fluid particle (w 1) slid 0.01 along z over a shape
+// particle (w 2) that stood still, overlapping it by 0.04 along x. mu = 1: the slip (0.01 <=
+// mu 0.04) is removed, the fluid taking 1/3 of it and the shape 2/3; mu = 0.1: it is cut by
+// mu 0.04 = 0.004 (to 0.006). Either way m dp sums to 0 along z, and the normal separation is
+// the frictionless one.
+TEST(ParticleContacts, SidedContactsHaveFrictionAndKeepMomentum) {
+  for (const auto& [mu, slip_after] : {std::pair{1.0f, 0.0}, std::pair{0.1f, 0.006}}) {
+    Particles p(2);
+    p.set(0, 0, 0, 0), p.set(1, 0.06, 0, 0);
+    p.z[0] = -0.01f;  // the fluid particle moved +0.01 in z from x to p
+    p.w[0] = 1.0f, p.w[1] = 2.0f;
+    SidedContacts c;
+    c.clear();
+    c.first.particle = {0};
+    c.first.partner = {1};
+    c.first.distance = {0.1f};
+    c.first.start = {0, 1};
+    c.second = {1};
+    c.second_entry = {0};
+    c.second_start = {0, 1};
+    std::vector<float> scratch;
+    solve_sided_contacts(p.view(), c, mu, scratch);
+    const double slip = (double(p.pz[0]) - p.z[0]) - (double(p.pz[1]) - p.z[1]);
+    EXPECT_NEAR(slip, slip_after, 1e-8) << mu;
+    EXPECT_NEAR(double(p.pz[0]) / 1.0 + double(p.pz[1]) / 2.0, 0.0, 1e-9) << mu;
+    EXPECT_NEAR(p.px[1] - p.px[0], 0.1, 1e-7) << mu;
+    EXPECT_NEAR(p.px[0], -0.04 / 3.0, 1e-7) << mu;
   }
 }
 

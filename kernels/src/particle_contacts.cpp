@@ -75,10 +75,10 @@ void solve_particle_contacts(const ParticleView& p, const ParticleContacts& c, f
 }
 
 // The momentum-keeping contacts (particle_contacts.hpp, solve_sided_contacts): pass 1 per
-// particle i, its pairs' impulses lambda n (averaged over its active contacts) and its own
-// correction; pass 2 per partner j, the sum of its entries' reactions in its list's order;
-// pass 3 applies both. Reads before writes: no result depends on the thread count.
-void solve_sided_contacts(const ParticleView& p, const SidedContacts& c, std::vector<float>& scratch) {
+// particle i, its pairs' impulses, normal and friction (averaged over its active contacts), and
+// its own correction; pass 2 per partner j, the sum of its entries' reactions in its list's
+// order; pass 3 applies both. Reads before writes: no result depends on the thread count.
+void solve_sided_contacts(const ParticleView& p, const SidedContacts& c, float friction, std::vector<float>& scratch) {
   const ParticleContacts& f = c.first;
   const std::size_t groups = f.size(), entries = f.partner.size(), partners = c.second.size();
   if (groups == 0) return;
@@ -91,6 +91,7 @@ void solve_sided_contacts(const ParticleView& p, const SidedContacts& c, std::ve
       const std::uint32_t i = f.particle[g];
       const float wi = p.w[i];
       const float xi = p.px[i], yi = p.py[i], zi = p.pz[i];
+      const float mi_x = xi - p.x[i], mi_y = yi - p.y[i], mi_z = zi - p.z[i];  // i's motion
       int active = 0;
       for (std::uint32_t k = f.start[g]; k < f.start[g + 1]; ++k) {
         float* e = impulse + 3 * std::size_t(k);
@@ -105,6 +106,18 @@ void solve_sided_contacts(const ParticleView& p, const SidedContacts& c, std::ve
         if (d < 1e-9f) continue;  // coincident: no normal
         const float lambda = (rest - d) / (w_sum * d);  // times (dx, dy, dz) = d n
         e[0] = lambda * dx, e[1] = lambda * dy, e[2] = lambda * dz;
+        if (friction > 0.0f) {  // the pair's relative tangential motion u_t, kept within mu (r - d)
+          const float nx = dx / d, ny = dy / d, nz = dz / d;
+          const float rx = mi_x - (p.px[j] - p.x[j]), ry = mi_y - (p.py[j] - p.y[j]), rz = mi_z - (p.pz[j] - p.z[j]);
+          const float rn = rx * nx + ry * ny + rz * nz;
+          const float tx = rx - rn * nx, ty = ry - rn * ny, tz = rz - rn * nz;
+          const float t_len = std::sqrt(tx * tx + ty * ty + tz * tz);
+          const float depth = rest - d;
+          if (t_len > 0.0f) {
+            const float keep = (t_len <= friction * depth ? 1.0f : friction * depth / t_len) / w_sum;
+            e[0] -= keep * tx, e[1] -= keep * ty, e[2] -= keep * tz;
+          }
+        }
         ++active;
       }
       const float inv = active > 0 ? 1.0f / float(active) : 0.0f;

@@ -299,7 +299,7 @@ bool ParticleContactStage::near_a_partner(const ParticleStore& store, std::size_
 
 void ParticleContactStage::solve(const kernels::ParticleView& p) {
   if (contacts_.size() != 0) kernels::solve_particle_contacts(p, contacts_, friction_, scratch_);
-  if (fluid_shape_.first.size() != 0) kernels::solve_sided_contacts(p, fluid_shape_, scratch_);
+  if (fluid_shape_.first.size() != 0) kernels::solve_sided_contacts(p, fluid_shape_, friction_, scratch_);
 }
 
 }  // namespace seiche

@@ -14,16 +14,18 @@
 //                              spacing + the fluid particle radius; solved apart, keeping each
 //                              pair's momentum (kernels::solve_sided_contacts: the fluid particle's
 //                              corrections averaged, the shape particle gets the sum of their
-//                              reactions, which shape matching spreads over its cluster), without
-//                              friction. The fluid's density sees shapes as its boundary too
-//                              (fluid_body/shape_boundary.hpp); these contacts keep it out of them.
+//                              reactions, which shape matching spreads over its cluster), with
+//                              the same friction as the other pairs. The fluid's density sees
+//                              shapes as its boundary too (fluid_body/shape_boundary.hpp); these
+//                              contacts keep it out of them.
 // Cloth particles, and shape particles within reach of another shape's, a cloth's or the fluid's
 // box, go into a grid of their own (the store is not reordered for it);
 // fluid partners are found in the fluid's neighbor grid. A pair is a candidate when closer than
 // kCandidateMargin times its contact distance, so contacts that close during the iterations
 // are not missed. Lists are in a fixed order: results do not depend on the thread count.
-// Friction: the largest of the cloths' `friction` for every pair (a shape has no coefficient of
-// its own: two shapes in a scene without cloth slide on each other without friction).
+// Friction: the largest of the cloths' `friction` for every pair, fluid-shape pairs included (a
+// shape and a fluid have no coefficient of their own: in a scene without cloth two shapes, or a
+// shape and the fluid, slide on each other without friction).
 #pragma once
 
 #include <cmath>

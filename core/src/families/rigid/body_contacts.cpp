@@ -116,7 +116,7 @@ void BodyContacts::find_pairs(const std::vector<RigidBody>& bodies) {
 void BodyContacts::solve_positions(std::vector<RigidBody>& bodies, const WorldContacts& world) {
   if (!pairs_found_) find_pairs(bodies);
   if (active_.empty()) return;
-  world.touched(resting_);
+  world.held_up(resting_, up_, kSupportCosine);
   for (std::size_t k = 0; k < bodies.size(); ++k) resting_[k] = resting_[k] || bodies[k].fixed();
   for (Active& pair : active_) solve_pair(pair, bodies[std::size_t(pair.a)], bodies[std::size_t(pair.b)]);
 }
@@ -162,11 +162,12 @@ void BodyContacts::solve_pair(Active& pair, RigidBody& a, RigidBody& b) {
       pushed += pen.depth * n;
     }
     if (touches_.empty()) break;
-    // Shock propagation: the lower body of a vertical contact, resting, carries the upper.
+    // Shock propagation: the lower body of a vertical contact, resting, carries the upper, unless
+    // the upper is fixed (a slab pressing down on it): then the lower is the one to move.
     const double vertical = dot(normalized_or_zero(pushed), up_);
-    const int fixed = vertical > kSupportCosine && b_resting    ? kFixedB
-                      : vertical < -kSupportCosine && a_resting ? kFixedA
-                                                                : kNeither;
+    const int fixed = vertical > kSupportCosine && b_resting && !a.fixed()    ? kFixedB
+                      : vertical < -kSupportCosine && a_resting && !b.fixed() ? kFixedA
+                                                                              : kNeither;
     double deepest = 0.0;
     for (Touch& t : touches_) {
       const double w = pair_inverse_mass(a0, b0, t.r_a, t.r_b, t.normal, fixed);

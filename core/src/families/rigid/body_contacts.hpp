@@ -43,12 +43,16 @@
 //     - else each point's impulse -|dp_t| / w_t t (t = dp_t / |dp_t|), with the best step.
 //   Stacks (shock propagation, Guendelman et al. 2003): a pair whose pushing direction (its
 //     normals weighted by their depths) is within 45 degrees of the vertical, with its lower body
-//     resting (it touched the world in this substep, or rests on a resting body, found in this
+//     resting (the world held it up in this substep: a contact whose normal is within 45 degrees
+//     of the vertical, not a wall's nor a ceiling's; or it rests on a resting body, found in this
 //     same bottom-up order), treats that lower body as fixed (w = 0, not moved): the ground
 //     carries what lands on it. Without it, the weight above reaches the floor only over many
 //     iterations: scenes/stack.json sank into itself (the top box by 0.95 mm) and drifted
 //     sideways by up to 3.5 mm in 10 s at the defaults (measured). A pair in the air, or side by
-//     side, keeps both masses: its momentum is conserved.
+//     side, keeps both masses: its momentum is conserved. Never against a fixed upper body: a
+//     resting body pressed up into a fixed slab keeps its mass (frozen, the pair had none, and
+//     its overlap stayed). A box thrown up along a wall into a slab, which rested when any
+//     contact with the world counted, went through the slab, fixed or held by a joint.
 // After the velocity update, per touching pair (the lower body again fixed where the positions
 // treated it so), with v_rel = (v_a + omega_a x r_a) - (v_b + omega_b x r_b) at each point:
 //   restitution: every point's normal speed change dv = -v_n + max(-e vbar_n, 0) at once (vbar_n
@@ -85,7 +89,7 @@ class BodyContacts {
   bool empty() const { return candidates_.empty(); }
   /// Before the bodies' predict: their velocities before the substep, the multipliers reset.
   void begin_substep(const std::vector<RigidBody>& bodies);
-  /// One iteration of the positional pass; `world` tells which bodies touched the static world in
+  /// One iteration of the positional pass; `world` tells which bodies the static world held up in
   /// this substep (they rest: shock propagation).
   void solve_positions(std::vector<RigidBody>& bodies, const WorldContacts& world);
   /// After the velocity update: restitution and dynamic friction.

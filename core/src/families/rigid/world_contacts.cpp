@@ -249,11 +249,17 @@ void WorldContacts::solve_velocities(std::vector<RigidBody>& bodies) {
   }
 }
 
-void WorldContacts::touched(std::vector<char>& out) const {
+void WorldContacts::held_up(std::vector<char>& out, Vec3d up, double min_cosine) const {
   const std::size_t bodies = materials_.size(), surfaces = std::size_t(surfaces_.count());
   out.assign(bodies, 0);
   for (std::size_t k = 0; k < bodies; ++k)
-    for (std::size_t s = 0; s < surfaces; ++s) out[k] = out[k] || pairs_[k * surfaces + s].lambda_n > 0.0;
+    for (std::size_t s = 0; s < surfaces && !out[k]; ++s) {
+      if (!(pairs_[k * surfaces + s].lambda_n > 0.0)) continue;
+      for (int point = first_point_[k]; point < first_point_[k + 1] && !out[k]; ++point) {
+        const Slot& contact = slots_[std::size_t(point) * surfaces + s];
+        out[k] = contact.lambda_n > 0.0 && dot(contact.normal, up) > min_cosine;
+      }
+    }
 }
 
 bool WorldContacts::face_patch(std::size_t body, int surface, bool this_iteration, Patch& out) {

@@ -79,8 +79,9 @@ class WorldContacts {
   void solve_positions(std::vector<RigidBody>& bodies);
   /// After the velocity update: dynamic friction and restitution.
   void solve_velocities(std::vector<RigidBody>& bodies);
-  /// Per body: whether it has touched a surface in this substep so far (a normal multiplier > 0).
-  void touched(std::vector<char>& out) const;
+  /// Per body: whether a surface has held it up in this substep so far: a point with a normal
+  /// multiplier > 0 whose normal n has n.up > min_cosine (a wall or a ceiling does not hold it).
+  void held_up(std::vector<char>& out, Vec3d up, double min_cosine) const;
 
  private:
   struct Material {

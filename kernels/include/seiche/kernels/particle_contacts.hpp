@@ -45,14 +45,17 @@ struct SidedContacts {
   void clear() { first.clear(), second.clear(), second_start.assign(1, 0), second_entry.clear(); }
 };
 
-/// One Jacobi iteration of momentum-keeping contacts, no friction. For particle i and each
-/// partner j closer than r, out of a_i such contacts of i:
+/// One Jacobi iteration of momentum-keeping contacts, with friction as solve_particle_contacts
+/// has it. For particle i and each partner j closer than r, out of a_i such contacts of i:
 ///   lambda = (r - d) / (w_i + w_j) / a_i,  n = (p_i - p_j) / d
-///   dp_i += w_i lambda n,  dp_j -= w_j lambda n
+///   u_t: the tangential part of the pair's relative motion of the substep, (p_i - x_i) - (p_j - x_j)
+///   keep = 1 where |u_t| <= mu (r - d) (static), else mu (r - d) / |u_t|
+///   impulse  P = lambda n - keep u_t / (w_i + w_j) / a_i
+///   dp_i += w_i P,  dp_j -= w_j P
 /// so m_i dp_i + m_j dp_j = 0 for every pair: i's corrections are averaged (a fluid particle
-/// between two partners is not pushed twice), j gets the sum of its pairs' reactions. Each sum
-/// runs over a list in a fixed order: the same bits on any thread count. `scratch` holds the
-/// pairs' impulses and the corrections.
-void solve_sided_contacts(const ParticleView& p, const SidedContacts& c, std::vector<float>& scratch);
+/// between two partners is not pushed twice), j gets the sum of its pairs' reactions. mu =
+/// `friction` (0: none). Each sum runs over a list in a fixed order: the same bits on any thread
+/// count. `scratch` holds the pairs' impulses and the corrections.
+void solve_sided_contacts(const ParticleView& p, const SidedContacts& c, float friction, std::vector<float>& scratch);
 
 }  // namespace seiche::kernels
