@@ -87,7 +87,12 @@ const KeyTable<SolverDef>& solver_keys() {
                "0.002 %; the same 20 links on hinges 142 % → 1.5e-10 %, their axes aligned within "
                "1e-15 rad). With geometric stiffness from the previous substep's multipliers, which the "
                "checkpoints hold; it gains no energy on that chain from 1 substep of 1 iteration per frame "
-               "up (docs/design.md). A loop's closing joint and the other joints (distance, slider, "
+               "up (docs/design.md). A tree whose bodies carry little load for their inertia "
+               "(pendulums, lightly loaded articulations) and on which no Gauss-Seidel joint acts takes "
+               "its step along the joints' directions at the start of the substep (SHAKE), which keeps "
+               "its energy: a double pendulum of 0.5 m boxes within 0.07 % over 10 s at the defaults, "
+               "where the end-of-step directions lose 9.8 %; heavily loaded trees (high mass ratios, "
+               "long chains) keep the end-of-step directions, which never gain energy. A loop's closing joint and the other joints (distance, slider, "
                "universal, hinges with limits or a motor) stay with Gauss-Seidel. `false`: every joint "
                "Gauss-Seidel. Scenes without ball, free hinge or fixed joints ignore it"),
   };

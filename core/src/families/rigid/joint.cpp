@@ -98,9 +98,9 @@ double JointSolver::slider_position(const Joint& j, std::span<const RigidBody> b
   return slider_position_of(j, a, b);
 }
 
-JointSolver::JointSolver(std::vector<Joint> joints, std::span<const RigidBody> bodies, bool trees)
+JointSolver::JointSolver(std::vector<Joint> joints, std::span<const RigidBody> bodies, bool trees, Vec3d gravity)
     : joints_(std::move(joints)), in_tree_(joints_.size(), 0) {
-  if (trees) take_trees(bodies);
+  if (trees) take_trees(bodies, gravity);
   std::vector<JointEnds> ends;
   const auto movable = [&](int body) { return body >= 0 && !bodies[std::size_t(body)].fixed() ? body : -1; };
   for (std::size_t k = 0; k < joints_.size(); ++k)
@@ -108,7 +108,7 @@ JointSolver::JointSolver(std::vector<Joint> joints, std::span<const RigidBody> b
   colours_ = JointColours(ends, bodies.size());
 }
 
-void JointSolver::take_trees(std::span<const RigidBody> bodies) {
+void JointSolver::take_trees(std::span<const RigidBody> bodies, Vec3d gravity) {
   std::vector<TreeLink> links;
   std::vector<std::size_t> joint_of;
   for (std::size_t k = 0; k < joints_.size(); ++k) {
@@ -122,8 +122,10 @@ void JointSolver::take_trees(std::span<const RigidBody> bodies) {
                      j.compliance});
     joint_of.push_back(k);
   }
-  trees_ = JointTreeSolver(links, bodies);
+  trees_ = JointTreeSolver(links, bodies, gravity);
   for (std::size_t l = 0; l < links.size(); ++l) in_tree_[joint_of[l]] = trees_.in_forest(l) ? 1 : 0;
+  for (std::size_t k = 0; k < joints_.size(); ++k)
+    if (!in_tree_[k]) trees_.keep_end_directions_at(joints_[k].body_a), trees_.keep_end_directions_at(joints_[k].body_b);
 }
 
 std::size_t JointSolver::tree_joints() const { return std::size_t(std::count(in_tree_.begin(), in_tree_.end(), 1)); }

@@ -84,7 +84,8 @@ class JointSolver {
   JointSolver() = default;
   /// With `trees`, the ball joints, hinges without limits or motor, and fixed joints that form a
   /// forest over `bodies` take the tree solve.
-  JointSolver(std::vector<Joint> joints, std::span<const RigidBody> bodies, bool trees);
+  /// `gravity` sets the load the tree solve expects on its joints (joint_tree.hpp).
+  JointSolver(std::vector<Joint> joints, std::span<const RigidBody> bodies, bool trees, Vec3d gravity = {});
 
   const std::vector<Joint>& joints() const { return joints_; }
   bool empty() const { return joints_.empty(); }
@@ -127,7 +128,7 @@ class JointSolver {
   RigidBody world_;  // fixed, at the origin, unrotated
 
   // Hands the ball joints, free hinges and fixed joints that form a forest to the tree solve.
-  void take_trees(std::span<const RigidBody> bodies);
+  void take_trees(std::span<const RigidBody> bodies, Vec3d gravity);
   // One Gauss-Seidel step of joint j (not in a tree); inverse_h2 = 1 / h^2.
   void solve_joint(Joint& j, std::span<RigidBody> bodies, double h, double inverse_h2);
 };

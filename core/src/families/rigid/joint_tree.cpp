@@ -5,6 +5,7 @@
 
 #include "portable_trig.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numeric>
 #include <utility>
@@ -87,9 +88,9 @@ struct AngularRows {
   Vec3d t[3];
 };
 
-AngularRows angular_rows(const TreeLink& j, const RigidBody& a) {
+AngularRows angular_rows(const TreeLink& j, Quatd q_a) {
   if (j.type == TreeJointType::Hinge)
-    return {2, {rotate(a.q, j.normal_a), rotate(a.q, cross(j.axis_a, j.normal_a)), {}}};
+    return {2, {rotate(q_a, j.normal_a), rotate(q_a, cross(j.axis_a, j.normal_a)), {}}};
   if (j.type == TreeJointType::Fixed) return {3, {{1.0, 0.0, 0.0}, {0.0, 1.0, 0.0}, {0.0, 0.0, 1.0}}};
   return {};
 }
@@ -154,13 +155,13 @@ double squared_norm(const Rows& v, int m) {
 
 double norm(const Rows& v, int m) { return std::sqrt(squared_norm(v, m)); }
 
-// diag(m I, I_world) of a movable body.
-std::array<double, 36> generalized_mass(const RigidBody& b) {
+// diag(m I, I_world) of a movable body turned to q (R I R^T).
+std::array<double, 36> generalized_mass(const RigidBody& b, Quatd q) {
   std::array<double, 36> k{};
   const double m = 1.0 / b.inverse_mass;
   k[0] = k[7] = k[14] = m;
-  const Vec3d columns[3] = {b.world_inertia({1.0, 0.0, 0.0}), b.world_inertia({0.0, 1.0, 0.0}),
-                            b.world_inertia({0.0, 0.0, 1.0})};
+  const auto turned = [&](Vec3d v) { return rotate(q, scale(b.inertia, rotate_back(q, v))); };
+  const Vec3d columns[3] = {turned({1.0, 0.0, 0.0}), turned({0.0, 1.0, 0.0}), turned({0.0, 0.0, 1.0})};
   for (int c = 0; c < 3; ++c) {
     const double column[3] = {columns[c].x, columns[c].y, columns[c].z};
     for (int row = 0; row < 3; ++row) k[(3 + row) * 6 + 3 + c] = column[row];
@@ -173,6 +174,14 @@ std::array<double, 36> generalized_mass(const RigidBody& b) {
 constexpr int kHalvings = 4;
 constexpr double kArmijo = 0.1;
 
+// The load a joint is expected to carry, in weights of its subtree: a pendulum let go from
+// horizontal pulls 3 m g at the bottom of its swing.
+constexpr double kSwingLoad = 3.0;
+// The largest trace(I^-1 K_geo) of a body (joint_tree.hpp) at which its tree takes the start
+// directions: measured, the pendulums at 8 x 2 reach 0.03 (double) and 0.3 (triple); the trees
+// whose energy must never rise start at 1.3 (the Y), 2.9 (100 links), 30 (1:1000).
+constexpr double kStartDirectionsLoad = 0.6;
+
 // The tension part of the geometric stiffness of a body pulled by the impulse f at its lever r
 // (joint_tree.hpp): k (I - r r^T / |r|^2) on the rotation block, k = max(f . r, 0).
 void add_geometric_stiffness(std::array<double, 36>& k, Vec3d r, Vec3d f) {
@@ -183,6 +192,16 @@ void add_geometric_stiffness(std::array<double, 36>& k, Vec3d r, Vec3d f) {
   for (int row = 0; row < 3; ++row)
     for (int c = 0; c < 3; ++c)
       k[std::size_t((3 + row) * 6 + 3 + c)] += stiffness * ((row == c ? 1.0 : 0.0) - v[row] * v[c] / r2);
+}
+
+// The geometric stiffness's weight at a connector (joint_tree.hpp, start directions): the trace
+// of I^-1 (I - n n^T) |r| = |r| (tr I^-1 - n^T I^-1 n), n = r / |r|, in the body frame (r the
+// anchor); 0 at the centre of mass. Times |f| it is trace(I^-1 K_geo) of that connector.
+double lever_weight(const RigidBody& b, Vec3d anchor) {
+  const double r2 = dot(anchor, anchor);
+  if (!(r2 > 0.0)) return 0.0;
+  const Vec3d& inv = b.inverse_inertia;
+  return (r2 * (inv.x + inv.y + inv.z) - dot(anchor, scale(inv, anchor))) / std::sqrt(r2);
 }
 
 int find_root(std::vector<int>& root, int v) {
@@ -199,7 +218,7 @@ Vec3d rotation_between(Vec3d u, Vec3d v) {
   return (portable_atan2(s, dot(u, v)) / s) * c;
 }
 
-JointTreeSolver::JointTreeSolver(std::span<const TreeLink> links, std::span<const RigidBody> bodies)
+JointTreeSolver::JointTreeSolver(std::span<const TreeLink> links, std::span<const RigidBody> bodies, Vec3d gravity)
     : links_(links.begin(), links.end()), in_forest_(links.size(), 0) {
   const int ground = int(bodies.size());
   const auto node_of = [&](int body) { return body < 0 || bodies[std::size_t(body)].fixed() ? ground : body; };
@@ -245,6 +264,48 @@ JointTreeSolver::JointTreeSolver(std::span<const TreeLink> links, std::span<cons
     tree_start_.push_back(nodes_.size());
   }
   work_.resize(nodes_.size());
+  tree_of_body_.assign(bodies.size(), -1);
+  end_directions_only_.assign(tree_start_.size() - 1, 0);
+  for (std::size_t t = 0; t + 1 < tree_start_.size(); ++t)
+    for (std::size_t i = tree_start_[t]; i < tree_start_[t + 1]; ++i) tree_of_body_[std::size_t(nodes_[i].body)] = int(t);
+  for (Node& n : nodes_) {
+    if (n.link < 0) continue;
+    const TreeLink& j = links_[std::size_t(n.link)];
+    const auto lever = [&](int body, Vec3d anchor) {
+      return body < 0 ? 0.0 : lever_weight(bodies[std::size_t(body)], anchor);
+    };
+    n.lever_own = n.body_is_b ? lever(j.body_b, j.anchor_b) : lever(j.body_a, j.anchor_a);
+    n.lever_parent = n.parent < 0 ? 0.0 : n.body_is_b ? lever(j.body_a, j.anchor_a) : lever(j.body_b, j.anchor_b);
+  }
+  // The subtrees' masses, leaves first (children after their parents).
+  std::vector<double> carried(nodes_.size(), 0.0);
+  for (std::size_t i = nodes_.size(); i-- > 0;) {
+    carried[i] += 1.0 / bodies[std::size_t(nodes_[i].body)].inverse_mass;
+    if (nodes_[i].parent >= 0) carried[std::size_t(nodes_[i].parent)] += carried[i];
+    nodes_[i].swing_force = kSwingLoad * length(gravity) * carried[i];
+  }
+  for (std::size_t e = 0; e < links_.size(); ++e)
+    if (!in_forest_[e]) keep_end_directions_at(links_[e].body_a), keep_end_directions_at(links_[e].body_b);
+}
+
+void JointTreeSolver::keep_end_directions_at(int body) {
+  if (body < 0 || std::size_t(body) >= tree_of_body_.size() || tree_of_body_[std::size_t(body)] < 0) return;
+  end_directions_only_[std::size_t(tree_of_body_[std::size_t(body)])] = 1;
+}
+
+bool JointTreeSolver::start_directions(std::size_t t, double h) {
+  if (end_directions_only_[t]) return false;
+  const std::size_t begin = tree_start_[t], end = tree_start_[t + 1];
+  for (std::size_t i = begin; i < end; ++i) work_[i].load = 0.0;
+  for (std::size_t i = begin; i < end; ++i) {
+    const Node& n = nodes_[i];
+    const double force = std::max(length(n.previous_lambda), n.swing_force * h * h);
+    work_[i].load += force * n.lever_own;
+    if (n.parent >= 0) work_[std::size_t(n.parent)].load += force * n.lever_parent;
+  }
+  double worst = 0.0;
+  for (std::size_t i = begin; i < end; ++i) worst = std::max(worst, work_[i].load);
+  return worst < kStartDirectionsLoad;
 }
 
 void JointTreeSolver::reset_multipliers() {
@@ -269,14 +330,16 @@ void JointTreeSolver::restore_multipliers(std::span<const Vec3d> lambdas) {
 }
 
 template <int m>
-bool JointTreeSolver::eliminate(std::size_t i, const RigidBody& a, const RigidBody& b, double inverse_h2) {
+bool JointTreeSolver::eliminate(std::size_t i, const RigidBody& a, const RigidBody& b, double inverse_h2, bool start) {
   const Node& n = nodes_[i];
   Work& w = work_[i];
   const TreeLink& j = links_[std::size_t(n.link)];
-  const Vec3d r_a = rotate(a.q, j.anchor_a), r_b = rotate(b.q, j.anchor_b);
-  const AngularRows angular = angular_rows(j, a);
-  const Jacobian own = n.body_is_b ? link_jacobian(1.0, r_b, angular) : link_jacobian(-1.0, r_a, angular);
-  w.jp = n.parent < 0 ? Jacobian{} : n.body_is_b ? link_jacobian(-1.0, r_a, angular) : link_jacobian(1.0, r_b, angular);
+  // The rows' directions: at the start of the substep, or as the bodies are now.
+  const Quatd q_a = start ? a.q_prev : a.q, q_b = start ? b.q_prev : b.q;
+  const Vec3d r_a = rotate(q_a, j.anchor_a), r_b = rotate(q_b, j.anchor_b);
+  const AngularRows directions = angular_rows(j, q_a);
+  const Jacobian own = n.body_is_b ? link_jacobian(1.0, r_b, directions) : link_jacobian(-1.0, r_a, directions);
+  w.jp = n.parent < 0 ? Jacobian{} : n.body_is_b ? link_jacobian(-1.0, r_a, directions) : link_jacobian(1.0, r_b, directions);
   for (int c = 0; c < m; ++c) {  // G = K^-1 J_ev^T, column by column
     const Vec6 column = cholesky_solve<6>(w.k, {own[std::size_t(c * 6)], own[std::size_t(c * 6 + 1)], own[std::size_t(c * 6 + 2)],
                                                 own[std::size_t(c * 6 + 3)], own[std::size_t(c * 6 + 4)], own[std::size_t(c * 6 + 5)]});
@@ -298,7 +361,7 @@ bool JointTreeSolver::eliminate(std::size_t i, const RigidBody& a, const RigidBo
     for (int row = 0; row < m; ++row) w.d_inv[std::size_t(row * m + c)] = column[std::size_t(row)];
   }
   w.alpha = alpha;
-  const Rows error = link_error(j, a, b, angular);
+  const Rows error = link_error(j, a, b, start ? angular_rows(j, a.q) : directions);
   const Rows moved = times<m>(own, w.u);
   Rows rest{};
   for (int row = 0; row < m; ++row) {
@@ -344,14 +407,19 @@ void JointTreeSolver::solve(std::span<RigidBody> bodies, double h) {
   const double inverse_h2 = 1.0 / (h * h);
   const RigidBody world;
   const auto body = [&](int k) -> const RigidBody& { return k < 0 ? world : bodies[std::size_t(k)]; };
+  for (std::size_t t = 0; t + 1 < tree_start_.size(); ++t) {
+    const bool start = start_directions(t, h);
+    for (std::size_t i = tree_start_[t]; i < tree_start_[t + 1]; ++i) work_[i].start = start;
+  }
   for (std::size_t i = 0; i < nodes_.size(); ++i) {
-    work_[i].k = generalized_mass(bodies[std::size_t(nodes_[i].body)]);
+    const RigidBody& v = bodies[std::size_t(nodes_[i].body)];
+    work_[i].k = generalized_mass(v, work_[i].start ? v.q_prev : v.q);
     work_[i].r = {};
   }
   // Geometric stiffness: each body pulled at its connector by the previous substep's impulse.
   for (std::size_t i = 0; i < nodes_.size(); ++i) {
     const Node& n = nodes_[i];
-    if (n.link < 0) continue;
+    if (n.link < 0 || work_[i].start) continue;
     const TreeLink& j = links_[std::size_t(n.link)];
     const RigidBody &a = body(j.body_a), &b = body(j.body_b);
     const Vec3d r_a = rotate(a.q, j.anchor_a), r_b = rotate(b.q, j.anchor_b);
@@ -371,9 +439,9 @@ void JointTreeSolver::solve(std::span<RigidBody> bodies, double h) {
     if (n.link < 0) continue;  // a free root
     const TreeLink& j = links_[std::size_t(n.link)];
     const RigidBody &a = body(j.body_a), &b = body(j.body_b);
-    const bool factored = n.rows == 3   ? eliminate<3>(i, a, b, inverse_h2)
-                          : n.rows == 5 ? eliminate<5>(i, a, b, inverse_h2)
-                                        : eliminate<6>(i, a, b, inverse_h2);
+    const bool factored = n.rows == 3   ? eliminate<3>(i, a, b, inverse_h2, w.start)
+                          : n.rows == 5 ? eliminate<5>(i, a, b, inverse_h2, w.start)
+                                        : eliminate<6>(i, a, b, inverse_h2, w.start);
     if (!factored) return;
   }
   // Roots to leaves.
@@ -401,7 +469,7 @@ double JointTreeSolver::merit_penalty(std::size_t begin, std::size_t end, std::s
     const Work& w = work_[i];
     const TreeLink& j = links_[std::size_t(n.link)];
     const RigidBody &a = body(j.body_a), &b = body(j.body_b);
-    const Rows error = link_error(j, a, b, angular_rows(j, a));
+    const Rows error = link_error(j, a, b, angular_rows(j, a.q));
     Rows residual{};
     for (int row = 0; row < n.rows; ++row)
       residual[std::size_t(row)] = error[std::size_t(row)] + w.alpha * (n.lambda[std::size_t(row)] + beta * w.dlambda[std::size_t(row)]);

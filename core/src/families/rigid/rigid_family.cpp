@@ -157,7 +157,7 @@ RigidFamily::RigidFamily(const SceneDef& scene, std::span<const std::shared_ptr<
       h_(scene.solver.frame_dt / scene.solver.substeps) {
   std::vector<double> extent;
   bodies_ = make_bodies(scene, extent);
-  joints_ = rigid::JointSolver(make_joints(scene, bodies_, extent), bodies_, scene.solver.joint_trees);
+  joints_ = rigid::JointSolver(make_joints(scene, bodies_, extent), bodies_, scene.solver.joint_trees, gravity_);
   contacts_ = rigid::WorldContacts(scene, h_, mesh_fields);
   body_contacts_ = rigid::BodyContacts(scene, contactless_pairs(joints_.joints(), bodies_), h_, body_mesh_fields_);
   start_energy_ = energy();
