@@ -36,6 +36,7 @@
 #include "families/rigid/body_mesh.hpp"
 #include "families/rigid/body_shape.hpp"
 #include "families/rigid/body_solid.hpp"
+#include "families/rigid/box_box.hpp"
 #include "families/rigid/body_surface.hpp"
 #include "families/rigid/portable_trig.hpp"
 #include "families/rigid/rigid_body.hpp"
@@ -1503,6 +1504,49 @@ TEST(BodyContacts, BallsAndCapsulesComeToRestOnBodies) {
   EXPECT_NEAR(p[4].position[1], 0.5 + 0.15, 1e-6);
   for (std::size_t k : {0u, 1u, 3u, 4u})
     EXPECT_LT(std::hypot(p[k].velocity[0], p[k].velocity[1], p[k].velocity[2]), 1e-6) << scene.rigid_bodies[k].name;
+}
+
+// Two long boxes (1 x 0.1 x 0.1 m) crossed at 90 degrees, each turned 45 degrees about its own
+// length, touch edge on edge: a's top edge along x, b's bottom edge along z, both through the
+// origin's vertical when b sits 0.1 sqrt(2) m above a less 1 cm. The edge-edge axis (y) is the
+// contact: one point at the crossing, depth 1 cm, normal pushing a down. Lifted 2 cm clear, only
+// that axis separates them (every face axis still overlaps): no contact.
+TEST(BodyContacts, BoxesCrossedEdgeOnEdgeTouchAtTheCrossing) {
+  const double diagonal = 0.1 * std::sqrt(2.0);  // the diamond's height
+  const auto turned = [](Vec3d axis) { return rotation_quaternion((std::numbers::pi / 4.0) * axis); };
+  const Vec3d half_a{0.5, 0.05, 0.05}, half_b{0.05, 0.05, 0.5};
+  RigidBody a = make_body({0.0, 0.0, 0.0}, turned({1, 0, 0}), {}, {}, 1.0, {1, 1, 1}, false);
+  RigidBody b = make_body({0.0, diagonal - 0.01, 0.0}, turned({0, 0, 1}), {}, {}, 1.0, {1, 1, 1}, false);
+  BoxBoxContact found[kMaxBoxBoxContacts];
+  ASSERT_EQ(box_box_contacts(a, half_a, b, half_b, found), 1);
+  EXPECT_NEAR(found[0].depth, 0.01, 1e-12);
+  EXPECT_NEAR(found[0].normal.y, -1.0, 1e-12);
+  EXPECT_NEAR(found[0].point_a.y, 0.5 * diagonal, 1e-12);   // a's top edge
+  EXPECT_NEAR(found[0].point_b.y, 0.5 * diagonal - 0.01, 1e-12);  // b's bottom edge
+  EXPECT_LT(std::hypot(found[0].point_a.x, found[0].point_a.z), 1e-12);
+  b.x.y = diagonal + 0.02;
+  EXPECT_EQ(box_box_contacts(a, half_a, b, half_b, found), 0);
+}
+
+// The same two boxes in a scene: a fixed, b dropped from 2 cm above the touch. b rests on the
+// crossing (it does not sink through a: its centre stays within 1 % of a's thickness, 1 mm, of
+// the touch height) and balances there for a second.
+TEST(BodyContacts, BoxDroppedCrossedOnAnEdgeRestsOnIt) {
+  const double diagonal = double(0.1f) * std::sqrt(2.0);
+  Simulation sim(load_scene_text(R"({
+    "domain": {"min": [-1, 0, -1], "max": [1, 2, 1], "friction": 0.5},
+    "rigid_bodies": [
+      {"name": "lower", "size": [1, 0.1, 0.1], "position": [0, 0.5, 0], "axis": [1, 0, 0], "angle": 45, "fixed": true},
+      {"name": "upper", "size": [0.1, 0.1, 1], "position": [0, 0.661421356, 0], "axis": [0, 0, 1], "angle": 45}]
+  })",
+                                 "crossed_boxes.json"));
+  double lowest = INFINITY;
+  for (int f = 0; f < 60; ++f) {
+    sim.step_frame(FrameMeasure::Skip);
+    lowest = std::min(lowest, sim.body_poses()[1].position[1] - 0.5);
+  }
+  EXPECT_GT(lowest, diagonal - 0.001);
+  EXPECT_NEAR(sim.body_poses()[1].position[1] - 0.5, diagonal, 0.001);
 }
 
 namespace {

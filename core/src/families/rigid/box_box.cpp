@@ -1,6 +1,7 @@
 // The contact of two boxes by separating axes and clipping (the math is in box_box.hpp).
 #include "box_box.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <initializer_list>
 
@@ -42,6 +43,84 @@ int clip(const Vec3d* in, int n, Vec3d u, double limit, Vec3d* out) {
   return m;
 }
 
+// The edge-edge axes u = A_i x B_j whose edges are not parallel: |A_i x B_j| = sin of their angle
+// above kParallelSine (nearly parallel edges have no reliable cross product; their faces and
+// corners hold them).
+constexpr double kParallelSine = 1e-6;
+// An edge axis is taken only where its overlap is below this share of the least face overlap: a
+// face holds a resting box with 4 points, an edge with 1, so near-ties (a box turned about the
+// normal on another, where A_x x B_z is the face normal) stay with the face.
+constexpr double kEdgePreference = 0.95;
+// An edge axis within rounding of a face axis (|cos| > 1 - kSameAxis) is that face axis.
+constexpr double kSameAxis = 1e-12;
+
+struct EdgeAxis {
+  int index = -1;        // 3 i + j: a's edge along A_i, b's along B_j; -1: none
+  Vec3d u;               // unit, from a towards b
+  double overlap = INFINITY;
+};
+
+// Whether unit u is one of the six face axes, to rounding (A_i x B_j is one where B_j is
+// perpendicular to A_i and A_i's two other axes, as with a box turned about a face normal): that
+// face's test decides it.
+bool along_face_axis(const OrientedBox (&boxes)[2], Vec3d u) {
+  for (const OrientedBox& box : boxes)
+    for (const Vec3d& axis : box.axes)
+      if (std::fabs(dot(u, axis)) > 1.0 - kSameAxis) return true;
+  return false;
+}
+
+// The edge-edge axis of least overlap o(u) = support_a(u) + support_b(u) - |(x_a - x_b).u| (ties:
+// the lower 3 i + j), d = x_a - x_b; false where one separates the boxes (o <= 0).
+bool least_edge_axis(const OrientedBox (&boxes)[2], Vec3d d, EdgeAxis& out) {
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      const Vec3d c = cross(boxes[0].axes[i], boxes[1].axes[j]);
+      const double sine = length(c);
+      if (!(sine > kParallelSine)) continue;
+      Vec3d u = (1.0 / sine) * c;
+      if (along_face_axis(boxes, u)) continue;
+      const double along = -dot(d, u);  // (x_b - x_a).u
+      const double overlap = support(boxes[0], u) + support(boxes[1], u) - std::fabs(along);
+      if (!(overlap > 0.0)) return false;
+      if (overlap < out.overlap) {
+        if (along < 0.0) u = -u;
+        out.index = 3 * i + j, out.u = u, out.overlap = overlap;
+      }
+    }
+  return true;
+}
+
+// The supporting edge of `box` along axis i farthest along `u`: its centre and half length.
+Vec3d edge_centre(const OrientedBox& box, int i, Vec3d u) {
+  Vec3d c = box.centre;
+  for (int k = 0; k < 3; ++k)
+    if (k != i) c += (dot(u, box.axes[k]) < 0.0 ? -box.half[k] : box.half[k]) * box.axes[k];
+  return c;
+}
+
+// Two boxes crossed edge on edge: a's edge farthest along u (towards b) and b's farthest along -u,
+// their closest points P_a, P_b (each clamped to its edge); one contact: a's point P_a, b's P_b,
+// depth the axis's overlap (= (P_a - P_b).u where neither is clamped), normal -u (a pushed away
+// from b).
+BoxBoxContact edge_edge_contact(const OrientedBox (&boxes)[2], const EdgeAxis& edge) {
+  const int i = edge.index / 3, j = edge.index % 3;
+  const Vec3d p = edge_centre(boxes[0], i, edge.u), q = edge_centre(boxes[1], j, -edge.u);
+  const Vec3d e = boxes[0].axes[i], f = boxes[1].axes[j];
+  // The closest points p + s e, q + t f of the two lines (unit directions, not parallel), with
+  // r = q - p: s = (e.r - (e.f)(f.r)) / (1 - (e.f)^2), t = (e.f) s - f.r; t clamped to b's edge,
+  // then s again for that t (s = e.r + (e.f) t) clamped to a's.
+  const Vec3d r = q - p;
+  const double ef = dot(e, f), denominator = 1.0 - ef * ef;
+  const double s_free = denominator > 0.0 ? (dot(e, r) - ef * dot(f, r)) / denominator : 0.0;
+  const double t = std::clamp(ef * s_free - dot(f, r), -boxes[1].half[j], boxes[1].half[j]);
+  const double s = std::clamp(dot(e, r) + ef * t, -boxes[0].half[i], boxes[0].half[i]);
+  BoxBoxContact c;
+  c.point_a = p + s * e, c.point_b = q + t * f;
+  c.normal = -edge.u, c.depth = edge.overlap;
+  return c;
+}
+
 }  // namespace
 
 int box_box_contacts(const RigidBody& a, Vec3d half_a, const RigidBody& b, Vec3d half_b,
@@ -58,6 +137,13 @@ int box_box_contacts(const RigidBody& a, Vec3d half_a, const RigidBody& b, Vec3d
       if (overlap < least) least = overlap, reference = k, axis = i;
     }
   if (!(least > 0.0)) return 0;  // separated
+  // The edge-edge axes: separated along one, or crossed edge on edge where one overlaps least.
+  EdgeAxis edge;
+  if (!least_edge_axis(boxes, d, edge)) return 0;
+  if (edge.index >= 0 && edge.overlap < kEdgePreference * least) {
+    out[0] = edge_edge_contact(boxes, edge);
+    return 1;
+  }
   const OrientedBox& ref = boxes[reference];
   const OrientedBox& inc = boxes[1 - reference];
   // f: out of the reference box, towards the incident one.

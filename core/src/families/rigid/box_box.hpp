@@ -1,4 +1,4 @@
-// The contact of two boxes (face against face, face against edge or corner), by separating axes
+// The contact of two boxes (face against face, edge or corner; edge against edge), by separating axes
 // and clipping, as in Box2D and ODE (Gottschalk's separating axes; Sutherland-Hodgman clipping):
 // box corners alone miss two boxes face on face when neither has a corner inside the other (a box
 // turned about the normal on an equal box: every corner sticks out).
@@ -11,8 +11,13 @@
 //     the slack keeps an edge that lies on a side, as equal stacked boxes have): up to 8 points p.
 //   Contacts: each p below the reference face's plane, depth d = (x_R + h_R,i f - p).f > 0; I's
 //     point p, R's point p + d f, and the normal n = f turned to point at a (f where R is b).
-// Edge against edge (two boxes crossed, neither face axis separating them least) gives no
-// contact: the 9 edge-edge axes are not tested (a known limit).
+//   Edge against edge (two boxes crossed): the 9 axes u = A_i x B_j of edges that are not
+//     parallel (|A_i x B_j| > 1e-6) nor along a face axis (to 1e-12: that face's test), with the
+//     same overlap o(u). One of them <= 0 separates the boxes (no contact). Where the least, ties
+//     to the lower 3 i + j, is below 0.95 times the least face overlap (a face holds a box with 4
+//     points, an edge with 1: near-ties stay with the face), u turned from a towards b: a's edge
+//     along A_i farthest along u, b's along B_j farthest along -u, their closest points P_a, P_b
+//     (each on its edge), one contact with depth o(u) and normal -u.
 #pragma once
 
 #include "rigid_body.hpp"
