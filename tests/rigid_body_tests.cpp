@@ -1551,6 +1551,92 @@ TEST(BodyContacts, BoxDroppedCrossedOnAnEdgeRestsOnIt) {
 
 namespace {
 
+// The least distance between two capsules' segments (body y from -length/2 to length/2), by
+// sampling both at 401 points (the distance is flat at its least: the sampling's error is far
+// below a micrometre here).
+double segments_apart(const BodyPose& a, double length_a, const BodyPose& b, double length_b) {
+  const auto point = [](const BodyPose& p, double length, int k) {
+    const Quatd q{p.orientation[0], p.orientation[1], p.orientation[2], p.orientation[3]};
+    return Vec3d{p.position[0], p.position[1], p.position[2]} + rotate(q, Vec3d{0.0, length * (k / 400.0 - 0.5), 0.0});
+  };
+  double least = INFINITY;
+  for (int i = 0; i <= 400; ++i)
+    for (int j = 0; j <= 400; ++j) least = std::min(least, length(point(a, length_a, i) - point(b, length_b, j)));
+  return least;
+}
+
+}  // namespace
+
+// Two capsules (radius 5 cm, 0.6 m between cap centres) crossed at 90 degrees: the lower lying on
+// the floor along x, the upper along z dropped on its middle from 5 cm above. Neither's cap
+// centres come near the other: the segments' closest points hold them. The upper rests crossed on
+// the lower for a second, its axis 2 radii above the lower's, never closer by 1 % of the radius.
+// Without gravity, two such capsules thrown at each other at 1 m/s each, restitution 0.5, bounce
+// apart at 0.5 m/s each instead of passing.
+TEST(BodyContacts, CapsulesCrossedSideOnSideRestCrossed) {
+  SceneDef scene = load_scene_text(R"({
+    "domain": {"min": [-1, 0, -1], "max": [1, 2, 1], "friction": 0.5},
+    "rigid_bodies": [
+      {"name": "lower", "shape": "capsule", "radius": 0.05, "length": 0.6, "position": [0, 0.05, 0],
+       "axis": [0, 0, 1], "angle": 90},
+      {"name": "upper", "shape": "capsule", "radius": 0.05, "length": 0.6, "position": [0, 0.2, 0],
+       "axis": [1, 0, 0], "angle": 90}]
+  })",
+                                   "crossed_capsules.json");
+  const double radius = double(0.05f), length = double(0.6f);
+  {
+    Simulation sim(scene);
+    double closest = INFINITY;
+    for (int f = 0; f < 60; ++f) {
+      sim.step_frame(FrameMeasure::Skip);
+      const std::vector<BodyPose> p = sim.body_poses();
+      closest = std::min(closest, segments_apart(p[0], length, p[1], length));
+    }
+    EXPECT_GT(closest, 2.0 * radius - 0.01 * radius);
+    const std::vector<BodyPose> p = sim.body_poses();
+    EXPECT_NEAR(p[1].position[1], 0.05 + 2.0 * radius, 0.01 * radius) << "upper, at rest on the lower";
+    EXPECT_LT(std::hypot(p[1].velocity[0], p[1].velocity[1], p[1].velocity[2]), 1e-3);
+  }
+  scene.solver.gravity = {0, 0, 0};
+  scene.rigid_bodies[0].velocity = {0, 1, 0}, scene.rigid_bodies[1].velocity = {0, -1, 0};
+  scene.rigid_bodies[0].restitution = 0.5f;
+  scene.rigid_bodies[0].position[1] = 0.8f, scene.rigid_bodies[1].position[1] = 1.2f;  // clear of the walls
+  Simulation sim(scene);
+  for (int f = 0; f < 30; ++f) sim.step_frame(FrameMeasure::Skip);
+  const std::vector<BodyPose> p = sim.body_poses();
+  EXPECT_GT(p[1].position[1] - p[0].position[1], 2.0 * radius) << "apart, upper still above";
+  EXPECT_NEAR(p[1].velocity[1], 0.5, 0.01) << "e times the approach speed, shared";
+  EXPECT_NEAR(p[0].velocity[1], -0.5, 0.01);
+}
+
+// A capsule (radius 5 cm, 0.6 m between cap centres) dropped lengthwise across a 0.2 m box on the
+// floor, its caps overhanging both sides: its ends' balls touch nothing, the segment clipped to
+// the box's top face holds it at both edges. It rests level on the top (axis one radius above
+// it, within 1 % of the radius, never lower), and the box stays on the floor.
+TEST(BodyContacts, CapsuleAcrossABoxRestsOnItsTop) {
+  Simulation sim(load_scene_text(R"({
+    "domain": {"min": [-1, 0, -1], "max": [1, 2, 1], "friction": 0.5},
+    "rigid_bodies": [
+      {"name": "box", "size": [0.2, 0.2, 0.2], "position": [0, 0.1, 0]},
+      {"name": "capsule", "shape": "capsule", "radius": 0.05, "length": 0.6, "position": [0, 0.3, 0],
+       "axis": [0, 0, 1], "angle": 90}]
+  })",
+                                 "capsule_on_box.json"));
+  const double radius = double(0.05f);
+  double lowest = INFINITY;
+  for (int f = 0; f < 60; ++f) {
+    sim.step_frame(FrameMeasure::Skip);
+    lowest = std::min(lowest, sim.body_poses()[1].position[1]);
+  }
+  const std::vector<BodyPose> p = sim.body_poses();
+  EXPECT_GT(lowest, 0.2 + radius - 0.01 * radius);
+  EXPECT_NEAR(p[1].position[1], 0.2 + radius, 0.01 * radius);
+  EXPECT_NEAR(p[0].position[1], 0.1, 1e-6) << "the box stays on the floor";
+  EXPECT_LT(std::hypot(p[1].velocity[0], p[1].velocity[1], p[1].velocity[2]), 1e-3);
+}
+
+namespace {
+
 // Boxes, balls and a capsule thrown into a heap, with friction and restitution.
 SceneDef heap_scene() {
   return load_scene_text(R"({

@@ -8,6 +8,7 @@
 #include "body_shape.hpp"
 #include "body_solid.hpp"
 #include "box_box.hpp"
+#include "capsule_sides.hpp"
 
 namespace seiche::rigid {
 
@@ -108,6 +109,14 @@ void BodyContacts::find_pairs(const std::vector<RigidBody>& bodies) {
         s.point = point, s.of_a = of_a;
         slots_.push_back(s);
       }
+    // A capsule's side against a capsule or a box: one slot per role (capsule_sides.hpp).
+    pair.first_side_slot = int(slots_.size());
+    if (has_capsule_sides(bodies_[std::size_t(pair.a)].solid, bodies_[std::size_t(pair.b)].solid))
+      for (int role = 0; role < kCapsuleSideRoles; ++role) {
+        Slot side;
+        side.point = -1;  // no ball: the segment's point of that role
+        slots_.push_back(side);
+      }
     pair.end_slot = int(slots_.size());
   }
   pairs_found_ = true;
@@ -142,7 +151,7 @@ void BodyContacts::solve_pair(Active& pair, RigidBody& a, RigidBody& b) {
         pushed += f.depth * f.normal;
       }
     }
-    for (int s = pair.first_slot; s < pair.end_slot && !boxes; ++s) {
+    for (int s = pair.first_slot; s < pair.first_side_slot && !boxes; ++s) {
       const Slot& slot = slots_[std::size_t(s)];
       const ContactPoint& c = points_[std::size_t(slot.point)];
       // The ball in the other body's frame, against its solid.
@@ -160,6 +169,16 @@ void BodyContacts::solve_pair(Active& pair, RigidBody& a, RigidBody& b) {
       const Vec3d n = slot.of_a ? m : -m;
       touches_.push_back({s, p_a - a0.x, p_b - b0.x, n, pen.depth, 0.0});
       pushed += pen.depth * n;
+    }
+    if (pair.first_side_slot < pair.end_slot) {  // a capsule's side (capsule_sides.hpp)
+      BoxBoxContact found[kCapsuleSideRoles];
+      capsule_side_contacts(a0, body_a.solid, b0, body_b.solid, found);
+      for (int role = 0; role < kCapsuleSideRoles; ++role) {
+        const BoxBoxContact& f = found[role];
+        if (!(f.depth > 0.0)) continue;
+        touches_.push_back({pair.first_side_slot + role, f.point_a - a0.x, f.point_b - b0.x, f.normal, f.depth, 0.0});
+        pushed += f.depth * f.normal;
+      }
     }
     if (touches_.empty()) break;
     // Shock propagation: the lower body of a vertical contact, resting, carries the upper.

@@ -110,6 +110,7 @@ class BodyContacts {
     int a = 0, b = 0;
     int candidate = 0;  // its index in candidates_ (the order of ties)
     int first_slot = 0, end_slot = 0;
+    int first_side_slot = 0;  // the slots from here on: a capsule's side (capsule_sides.hpp)
     double height = 0.0;    // the lower centre along -gravity
     int fixed = 0;          // shock propagation in the last normal pass: 1 a, 2 b treated as fixed, 0 neither
     double lambda_n = 0.0;  // the sum of its points' normal multipliers
