@@ -1398,9 +1398,10 @@ double sphere_mass(double density, double radius) { return density * 4.0 / 3.0 *
 }  // namespace
 
 // The stack: scenes/stack.json, 10 cubes of 0.2 m on the floor, stands for 10 s with no box
-// moving more than 1 % of its size (2 mm); measured: 3e-14 m. And the same stack with every box
+// moving more than 1 % of its size (2 mm); measured: 7e-8 m. And the same stack with every box
 // shifted by up to 1 cm and turned by up to 6 degrees about the vertical (no corner of one box then
-// lies inside its neighbour: the faces' clipping holds it): 6e-6 m measured.
+// lies inside its neighbour: the faces' clipping holds it): 6e-5 m measured. (With the box
+// contacts' slots in clip order, which handed impulses between corners: 3e-14 m and 6e-6 m.)
 TEST(BodyContacts, StackOfTenBoxesStandsForTenSeconds) {
   SceneDef scene = load_scene_file(std::string(SEICHE_SCENES_DIR) + "/stack.json");
   ASSERT_EQ(scene.rigid_bodies.size(), 10u);
@@ -1526,6 +1527,46 @@ TEST(BodyContacts, BoxesCrossedEdgeOnEdgeTouchAtTheCrossing) {
   EXPECT_LT(std::hypot(found[0].point_a.x, found[0].point_a.z), 1e-12);
   b.x.y = diagonal + 0.02;
   EXPECT_EQ(box_box_contacts(a, half_a, b, half_b, found), 0);
+}
+
+// A pair's contact slots carry each point's normal impulse through a substep (for friction and
+// restitution), so a slot must stay with its point: each box contact names its features. Two
+// 0.2 m cubes, b turned 45 degrees about the vertical, tipped 0.002 rad about x (its bottom is
+// then the reference face) and 1 mm into a's top: 8 points (a's top edges across b's four sides),
+// 8 distinct features. Tipped by 0.015 rad instead, the two points on the side that rises leave:
+// 6 points, in a clip order shifted against the 8 (a slot numbered by that order would hand one
+// point's impulse to another), but each still under its feature, within 2 mm of where that
+// feature was in b's frame.
+TEST(BodyContacts, BoxContactsKeepTheirFeaturesWhenPointsLeave) {
+  const RigidBody a = make_body({0.0, 0.0, 0.0}, Quatd{}, {}, {}, 1.0, {1, 1, 1}, false);
+  const Vec3d half{0.1, 0.1, 0.1};
+  const Quatd flat = rotation_quaternion({0.0, std::numbers::pi / 4.0, 0.0});
+  const auto contacts = [&](Quatd q, std::vector<BoxBoxContact>& out) {
+    const RigidBody b = make_body({0.0, 0.2 - 0.001, 0.0}, q, {}, {}, 1.0, {1, 1, 1}, false);
+    BoxBoxContact found[kMaxBoxBoxContacts];
+    const int count = box_box_contacts(a, half, b, half, found);
+    out.assign(found, found + count);
+    for (BoxBoxContact& c : out) c.point_b = rotate_back(b.q, c.point_b - b.x);  // b's frame
+  };
+  std::vector<BoxBoxContact> before, after;
+  contacts(rotation_quaternion({0.002, 0.0, 0.0}) * flat, before);
+  contacts(rotation_quaternion({0.015, 0.0, 0.0}) * flat, after);
+  ASSERT_EQ(before.size(), 8u);
+  ASSERT_EQ(after.size(), 6u);
+  bool shifted = false;
+  for (std::size_t k = 0; k < after.size(); ++k) {
+    shifted = shifted || after[k].feature != before[k].feature;
+    int same = 0;
+    for (const BoxBoxContact& c : before)
+      if (c.feature == after[k].feature) {
+        ++same;
+        EXPECT_LT(length(c.point_b - after[k].point_b), 0.002) << "feature " << c.feature;
+      }
+    EXPECT_EQ(same, 1) << "feature " << after[k].feature;
+  }
+  EXPECT_TRUE(shifted) << "the clip order moved";
+  for (std::size_t i = 0; i < before.size(); ++i)
+    for (std::size_t j = i + 1; j < before.size(); ++j) EXPECT_NE(before[i].feature, before[j].feature);
 }
 
 // The same two boxes in a scene: a fixed, b dropped from 2 cm above the touch. b rests on the

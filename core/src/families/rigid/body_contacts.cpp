@@ -142,12 +142,15 @@ void BodyContacts::solve_pair(Active& pair, RigidBody& a, RigidBody& b) {
     const RigidBody a0 = a, b0 = b;
     touches_.clear();
     Vec3d pushed{};  // the normals weighted by their depths: the way the pair is pushed apart
-    if (boxes) {  // face against face by clipping (box_box.hpp); the slots in the clip's order
+    if (boxes) {  // by separating axes and clipping (box_box.hpp); a slot per touching feature
       BoxBoxContact found[kMaxBoxBoxContacts];
       const int count = box_box_contacts(a0, body_a.solid.b, b0, body_b.solid.b, found);
+      ++pass_stamp_;
       for (int k = 0; k < count; ++k) {
         const BoxBoxContact& f = found[k];
-        touches_.push_back({pair.first_slot + k, f.point_a - a0.x, f.point_b - b0.x, f.normal, f.depth, 0.0});
+        const int slot = feature_slot(pair, f.feature);
+        if (slot < 0) continue;  // every slot taken in this iteration: found again in the next pass
+        touches_.push_back({slot, f.point_a - a0.x, f.point_b - b0.x, f.normal, f.depth, 0.0});
         pushed += f.depth * f.normal;
       }
     }
@@ -241,6 +244,28 @@ void BodyContacts::solve_pair(Active& pair, RigidBody& a, RigidBody& b) {
   if (!(length(pair.lambda_t + sum) < mu_s * pair.lambda_n)) return;  // slides
   pair.lambda_t += sum;
   apply_positions(a, b, step, pair.fixed);
+}
+
+int BodyContacts::feature_slot(const Active& pair, int feature) {
+  int free = -1, stale = -1;
+  for (int s = pair.first_slot; s < pair.end_slot; ++s) {
+    Slot& slot = slots_[std::size_t(s)];
+    if (slot.feature == feature) {
+      slot.stamp = pass_stamp_;
+      return s;
+    }
+    if (slot.feature < 0) {
+      if (free < 0) free = s;
+    } else if (stale < 0 && !slot.touching && slot.stamp != pass_stamp_) {
+      stale = s;
+    }
+  }
+  const int s = free >= 0 ? free : stale;
+  if (s < 0) return -1;
+  Slot& slot = slots_[std::size_t(s)];
+  slot = Slot{};
+  slot.feature = feature, slot.stamp = pass_stamp_;
+  return s;
 }
 
 bool BodyContacts::face_friction(Active& pair, RigidBody& a, RigidBody& b, double mu_s) {
