@@ -7,6 +7,7 @@
 #include "body_correction.hpp"
 #include "body_shape.hpp"
 #include "body_solid.hpp"
+#include "body_surface.hpp"
 #include "box_box.hpp"
 #include "capsule_sides.hpp"
 
@@ -37,6 +38,18 @@ Vec3d relative_velocity(Vec3d v_a, Vec3d omega_a, Vec3d v_b, Vec3d omega_b, Vec3
   return (v_a + cross(omega_a, r_a)) - (v_b + cross(omega_b, r_b));
 }
 
+// A mesh body's large triangles (area above (extent / 8)^2): each corner moved a third of the way
+// to the triangle's centroid, as a point of radius 0 (body_contacts.hpp).
+void append_face_points(const BodySurface& surface, double extent, std::vector<ContactPoint>& out) {
+  const double large = (extent / 8.0) * (extent / 8.0);
+  for (const auto& t : surface.triangles) {
+    const Vec3d p[3] = {surface.vertices[t[0]], surface.vertices[t[1]], surface.vertices[t[2]]};
+    if (!(0.5 * length(cross(p[1] - p[0], p[2] - p[0])) > large)) continue;
+    const Vec3d centroid = (1.0 / 3.0) * (p[0] + p[1] + p[2]);
+    for (const Vec3d& corner : p) out.push_back({corner + (1.0 / 3.0) * (centroid - corner), 0.0});
+  }
+}
+
 }  // namespace
 
 BodyContacts::BodyContacts(const SceneDef& scene, const std::vector<std::pair<int, int>>& jointed, double substep,
@@ -61,8 +74,9 @@ BodyContacts::BodyContacts(const SceneDef& scene, const std::vector<std::pair<in
     Body b;
     b.first_point = int(points_.size());
     for (const ContactPoint& p : contact_points(def)) points_.push_back(p);
-    b.end_point = int(points_.size());
     const ShapeDims dims = body_shape_def(def);
+    if (dims.shape == BodyShape::Mesh) append_face_points(body_surface(def), mass_properties(dims).extent, points_);
+    b.end_point = int(points_.size());
     if (dims.shape == BodyShape::Mesh) mesh_sdfs_.push_back(mesh_fields.get(k));
     b.solid = body_solid(dims, dims.shape == BodyShape::Mesh ? mesh_sdfs_.back().get() : nullptr);
     b.extent = mass_properties(dims).extent;

@@ -6,7 +6,11 @@
 // Narrow phase: two boxes by separating axes and clipping, face against face or edge against
 // edge (box_box.hpp), each point in the pair's slot of its features (below). Any other pair:
 // each body's contact points (world_contacts.hpp: a sphere's centre with its radius, a capsule's
-// cap centres with its radius, box corners, a mesh's vertices) against the other body's solid
+// cap centres with its radius, box corners, a mesh's vertices; and here a mesh's large triangles,
+// area above (extent / 8)^2, each corner moved a third of the way to the centroid, radius 0:
+// equal mesh cubes stacked meet vertex on vertex, where a vertex lies on the lower body's side
+// as much as under its top, so the nearest face is the side and the depth 0, and they fell
+// through; points inside the faces hold them) against the other body's solid
 // (world_surfaces.hpp's penetration() on body_solid.hpp: box, sphere, capsule, or the closed
 // mesh's signed distance field in its body frame), the point moved into that body's frame, both
 // ways per pair; and a capsule's side against a capsule or a box (capsule_sides.hpp: the
