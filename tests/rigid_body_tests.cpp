@@ -1293,6 +1293,23 @@ TEST(Contacts, BallRestsOnEveryColliderShape) {
   for (const BodyPose& b : p) EXPECT_LT(std::hypot(b.velocity[0], b.velocity[1], b.velocity[2]), 1e-6);
 }
 
+// A box body touches at its corners, points of radius 0: dropped on the shipped cube mesh as a
+// collider (0.5 m, its top at 0.25 m), it rests on it, its centre 0.1 m above the top within 2 mm
+// (the field's voxel is 7.8 mm). (Its corners once never touched a mesh field: it fell through.)
+TEST(Contacts, BoxRestsOnAMeshCollider) {
+  const SceneDef scene = load_scene_text(R"({
+    "domain": {"min": [-1, -1, -1], "max": [1, 2, 1], "friction": 0.5},
+    "colliders": [{"mesh": {"file": ")" + std::string(SEICHE_SCENES_DIR) + R"(/meshes/cube.obj", "scale": 0.5}}],
+    "rigid_bodies": [{"name": "box", "size": [0.2, 0.2, 0.2], "position": [0, 0.5, 0]}]
+  })",
+                                         "box_on_mesh.json");
+  Simulation sim(scene);
+  for (int f = 0; f < 90; ++f) sim.step_frame(FrameMeasure::Skip);
+  const BodyPose p = sim.body_poses()[0];
+  EXPECT_NEAR(p.position[1], 0.35, 2e-3);
+  EXPECT_LT(std::hypot(p.velocity[0], p.velocity[1], p.velocity[2]), 1e-6);
+}
+
 // A mesh collider's signed distance field is built once, by the collider family, and the bodies'
 // contacts hold that same field (a second build would leave the collider family its only owner);
 // a rigid family given no field for a mesh collider is refused.

@@ -75,6 +75,7 @@
 // the world the body's own counts, as here against a body of restitution 0).
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <utility>
 #include <vector>
@@ -116,7 +117,7 @@ class BodyContacts {
     int point = 0;
     bool of_a = true;   // a's point in b's solid, else b's in a's
     int feature = -1;   // two boxes: the features that touch there (box_box.hpp); -1: none yet
-    int stamp = -1;     // two boxes: the normal pass that last found that feature
+    std::uint32_t stamp = 0;  // two boxes: the normal pass that last found that feature
     bool touching = false;
     double lambda_n = 0.0;
     Vec3d normal;       // world: the way a is pushed
@@ -176,7 +177,7 @@ class BodyContacts {
   bool pairs_found_ = false;  // in this substep
   double h_ = 0.0;
   double rest_speed_ = 0.0;  // 2 |g| h
-  int pass_stamp_ = 0;       // counts the normal passes of box pairs (Slot::stamp)
+  std::uint32_t pass_stamp_ = 0;  // counts the normal passes of box pairs (Slot::stamp; wraps)
 };
 
 }  // namespace seiche::rigid

@@ -13,7 +13,7 @@
 //     their cross product turned towards x_a - x_b), a's point c_a - rho_a n, b's c_b + rho_b n.
 //   Capsule against box (in the box's frame, half sizes h): f(t) = sdf_box(A + t (B - A)) is
 //     convex (the signed distance of a convex solid), so its least t* is found by ternary search
-//     (64 halvings of the bracket by a third). Its face: the axis k where p(t*) sticks out most,
+//     (64 steps, each keeping 2/3 of the bracket: 5e-12 of the segment). Its face: the axis k where p(t*) sticks out most,
 //     |p_k| - h_k. Like a box on a face, the segment clipped to that face's sides (|p_j| <= h_j,
 //     j != k) gives its two ends t_0 <= t_1, and the segment's points there rest on the face (a
 //     capsule across a narrower box: one at each edge); t* adds the deepest point where it is
