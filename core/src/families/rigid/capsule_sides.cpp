@@ -66,6 +66,13 @@ void capsule_on_box(const RigidBody& capsule, const SolidSurface& cs, const Rigi
   const Vec3d from = rotate_back(box.q, capsule.world_point(cs.a) - box.x);
   const Vec3d along = rotate_back(box.q, capsule.world_point(cs.b) - box.x) - from;
   const Vec3d half = 0.5 * (bs.b - bs.a);
+  // Both ends beyond one face of the box grown by the radius: the whole segment is (no search).
+  const Vec3d to = from + along;
+  for (int k = 0; k < 3; ++k) {
+    const double reach = component(half, k) + cs.radius;
+    if (std::min(component(from, k), component(to, k)) > reach || std::max(component(from, k), component(to, k)) < -reach)
+      return;
+  }
   const auto f = [&](double t) { return box_distance(from + t * along, half); };
   double lo = 0.0, hi = 1.0;
   for (int step = 0; step < kSearchSteps; ++step) {

@@ -11,7 +11,8 @@
 //     parallel (D > 1e-12 |d_a|^2 |d_b|^2: parallel ones touch at an end's ball). Depth
 //     rho_a + rho_b - |c_a - c_b|, normal n = (c_a - c_b) / |c_a - c_b| (where the axes meet:
 //     their cross product turned towards x_a - x_b), a's point c_a - rho_a n, b's c_b + rho_b n.
-//   Capsule against box (in the box's frame, half sizes h): f(t) = sdf_box(A + t (B - A)) is
+//   Capsule against box (in the box's frame, half sizes h; nothing where both ends lie beyond one
+//     face of the box grown by the radius, |p_k| > h_k + rho on one side): f(t) = sdf_box(A + t (B - A)) is
 //     convex (the signed distance of a convex solid), so its least t* is found by ternary search
 //     (64 steps, each keeping 2/3 of the bracket: 5e-12 of the segment). Its face: the axis k where p(t*) sticks out most,
 //     |p_k| - h_k. Like a box on a face, the segment clipped to that face's sides (|p_j| <= h_j,
