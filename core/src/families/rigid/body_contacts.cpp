@@ -7,7 +7,9 @@
 #include "body_correction.hpp"
 #include "body_shape.hpp"
 #include "body_solid.hpp"
+#include "body_surface.hpp"
 #include "box_box.hpp"
+#include "capsule_sides.hpp"
 
 namespace seiche::rigid {
 
@@ -36,6 +38,18 @@ Vec3d relative_velocity(Vec3d v_a, Vec3d omega_a, Vec3d v_b, Vec3d omega_b, Vec3
   return (v_a + cross(omega_a, r_a)) - (v_b + cross(omega_b, r_b));
 }
 
+// A mesh body's large triangles (area above (extent / 8)^2): each corner moved a third of the way
+// to the triangle's centroid, as a point of radius 0 (body_contacts.hpp).
+void append_face_points(const BodySurface& surface, double extent, std::vector<ContactPoint>& out) {
+  const double large = (extent / 8.0) * (extent / 8.0);
+  for (const auto& t : surface.triangles) {
+    const Vec3d p[3] = {surface.vertices[t[0]], surface.vertices[t[1]], surface.vertices[t[2]]};
+    if (!(0.5 * length(cross(p[1] - p[0], p[2] - p[0])) > large)) continue;
+    const Vec3d centroid = (1.0 / 3.0) * (p[0] + p[1] + p[2]);
+    for (const Vec3d& corner : p) out.push_back({corner + (1.0 / 3.0) * (centroid - corner), 0.0});
+  }
+}
+
 }  // namespace
 
 BodyContacts::BodyContacts(const SceneDef& scene, const std::vector<std::pair<int, int>>& jointed, double substep,
@@ -60,8 +74,9 @@ BodyContacts::BodyContacts(const SceneDef& scene, const std::vector<std::pair<in
     Body b;
     b.first_point = int(points_.size());
     for (const ContactPoint& p : contact_points(def)) points_.push_back(p);
-    b.end_point = int(points_.size());
     const ShapeDims dims = body_shape_def(def);
+    if (dims.shape == BodyShape::Mesh) append_face_points(body_surface(def), mass_properties(dims).extent, points_);
+    b.end_point = int(points_.size());
     if (dims.shape == BodyShape::Mesh) mesh_sdfs_.push_back(mesh_fields.get(k));
     b.solid = body_solid(dims, dims.shape == BodyShape::Mesh ? mesh_sdfs_.back().get() : nullptr);
     b.extent = mass_properties(dims).extent;
@@ -108,6 +123,14 @@ void BodyContacts::find_pairs(const std::vector<RigidBody>& bodies) {
         s.point = point, s.of_a = of_a;
         slots_.push_back(s);
       }
+    // A capsule's side against a capsule or a box: one slot per role (capsule_sides.hpp).
+    pair.first_side_slot = int(slots_.size());
+    if (has_capsule_sides(bodies_[std::size_t(pair.a)].solid, bodies_[std::size_t(pair.b)].solid))
+      for (int role = 0; role < kCapsuleSideRoles; ++role) {
+        Slot side;
+        side.point = -1;  // no ball: the segment's point of that role
+        slots_.push_back(side);
+      }
     pair.end_slot = int(slots_.size());
   }
   pairs_found_ = true;
@@ -133,16 +156,19 @@ void BodyContacts::solve_pair(Active& pair, RigidBody& a, RigidBody& b) {
     const RigidBody a0 = a, b0 = b;
     touches_.clear();
     Vec3d pushed{};  // the normals weighted by their depths: the way the pair is pushed apart
-    if (boxes) {  // face against face by clipping (box_box.hpp); the slots in the clip's order
+    if (boxes) {  // by separating axes and clipping (box_box.hpp); a slot per touching feature
       BoxBoxContact found[kMaxBoxBoxContacts];
       const int count = box_box_contacts(a0, body_a.solid.b, b0, body_b.solid.b, found);
+      ++pass_stamp_;
       for (int k = 0; k < count; ++k) {
         const BoxBoxContact& f = found[k];
-        touches_.push_back({pair.first_slot + k, f.point_a - a0.x, f.point_b - b0.x, f.normal, f.depth, 0.0});
+        const int slot = feature_slot(pair, f.feature);
+        if (slot < 0) continue;  // every slot taken in this iteration: found again in the next pass
+        touches_.push_back({slot, f.point_a - a0.x, f.point_b - b0.x, f.normal, f.depth, 0.0});
         pushed += f.depth * f.normal;
       }
     }
-    for (int s = pair.first_slot; s < pair.end_slot && !boxes; ++s) {
+    for (int s = pair.first_slot; s < pair.first_side_slot && !boxes; ++s) {
       const Slot& slot = slots_[std::size_t(s)];
       const ContactPoint& c = points_[std::size_t(slot.point)];
       // The ball in the other body's frame, against its solid.
@@ -160,6 +186,16 @@ void BodyContacts::solve_pair(Active& pair, RigidBody& a, RigidBody& b) {
       const Vec3d n = slot.of_a ? m : -m;
       touches_.push_back({s, p_a - a0.x, p_b - b0.x, n, pen.depth, 0.0});
       pushed += pen.depth * n;
+    }
+    if (pair.first_side_slot < pair.end_slot) {  // a capsule's side (capsule_sides.hpp)
+      BoxBoxContact found[kCapsuleSideRoles];
+      capsule_side_contacts(a0, body_a.solid, b0, body_b.solid, found);
+      for (int role = 0; role < kCapsuleSideRoles; ++role) {
+        const BoxBoxContact& f = found[role];
+        if (!(f.depth > 0.0)) continue;
+        touches_.push_back({pair.first_side_slot + role, f.point_a - a0.x, f.point_b - b0.x, f.normal, f.depth, 0.0});
+        pushed += f.depth * f.normal;
+      }
     }
     if (touches_.empty()) break;
     // Shock propagation: the lower body of a vertical contact, resting, carries the upper, unless
@@ -223,6 +259,28 @@ void BodyContacts::solve_pair(Active& pair, RigidBody& a, RigidBody& b) {
   if (!(length(pair.lambda_t + sum) < mu_s * pair.lambda_n)) return;  // slides
   pair.lambda_t += sum;
   apply_positions(a, b, step, pair.fixed);
+}
+
+int BodyContacts::feature_slot(const Active& pair, int feature) {
+  int free = -1, stale = -1;
+  for (int s = pair.first_slot; s < pair.end_slot; ++s) {
+    Slot& slot = slots_[std::size_t(s)];
+    if (slot.feature == feature) {
+      slot.stamp = pass_stamp_;
+      return s;
+    }
+    if (slot.feature < 0) {
+      if (free < 0) free = s;
+    } else if (stale < 0 && !slot.touching && slot.stamp != pass_stamp_) {
+      stale = s;
+    }
+  }
+  const int s = free >= 0 ? free : stale;
+  if (s < 0) return -1;
+  Slot& slot = slots_[std::size_t(s)];
+  slot = Slot{};
+  slot.feature = feature, slot.stamp = pass_stamp_;
+  return s;
 }
 
 bool BodyContacts::face_friction(Active& pair, RigidBody& a, RigidBody& b, double mu_s) {

@@ -3,15 +3,29 @@
 // with two bodies moving: every correction is an impulse p on body a at lever r_a and -p on body b
 // at r_b, and every inverse mass the sum w = w_a + w_b (body_correction.hpp).
 //
-// Narrow phase: two boxes face against face by separating axes and clipping (box_box.hpp). Any
-// other pair: each body's contact points (world_contacts.hpp: a sphere's centre with its radius,
-// a capsule's cap centres with its radius, box corners, a mesh's vertices) against the other
-// body's solid (world_surfaces.hpp's penetration() on body_solid.hpp: box, sphere, capsule, or
-// the closed mesh's signed distance field in its body frame), the point moved into that body's frame, both
-// ways per pair. A ball against a solid is exact: sphere-sphere, sphere-capsule, and
-// capsule-capsule end on or side by side. Known limits: two capsules crossed side on side (no cap
-// centre in the other) pass through each other; two boxes crossed edge on edge (box_box.hpp);
-// a mesh touches at its vertices, the normal from the other body's nearest face point by point.
+// Narrow phase: two boxes by separating axes and clipping, face against face or edge against
+// edge (box_box.hpp), each point in the pair's slot of its features (below). Any other pair:
+// each body's contact points (world_contacts.hpp: a sphere's centre with its radius, a capsule's
+// cap centres with its radius, box corners, a mesh's vertices; and here a mesh's large triangles,
+// area above (extent / 8)^2, each corner moved a third of the way to the centroid, radius 0:
+// equal mesh cubes stacked meet vertex on vertex, where a vertex lies on the lower body's side
+// as much as under its top, so the nearest face is the side and the depth 0, and they fell
+// through; points inside the faces hold them) against the other body's solid
+// (world_surfaces.hpp's penetration() on body_solid.hpp: box, sphere, capsule, or the closed
+// mesh's signed distance field in its body frame), the point moved into that body's frame, both
+// ways per pair; and a capsule's side against a capsule or a box (capsule_sides.hpp: the
+// segments' crossing, the segment across a box's face or edge), one slot per role. A ball
+// against a solid is exact: sphere-sphere, sphere-capsule, and capsule-capsule end on or side by
+// side. Known limits: a capsule's side against a mesh body (only its cap balls touch it); a mesh
+// touches at its vertices, the normal from the other body's nearest face point by point.
+// Slots: a point's normal multiplier is summed in its slot over the substep's passes and
+// iterations, and read by friction and restitution at that point, so a slot keeps one point: a
+// ball's slot is its body's contact point, a box pair's is keyed by the touching features
+// (box_box.hpp; numbered in clip order, a slot handed one corner's impulse to another when a
+// point left the clip or a depth of 1e-17 came and went). A box pair has 16 slots; where a
+// substep finds more features, a slot whose feature touched in no pass of this iteration is taken
+// over (its state dropped). When the reference face changes, the features are new, so their
+// slots start from zero (the old ones keep what they carried, at their points).
 // For a's ball (centre c, radius rho) reaching depth d into b along b's outward normal m: the
 // normal n = m (the way a is pushed), a's point P_a = c - rho m, b's point P_b = P_a + d m; b's
 // ball into a: n = -m, P_b = c - rho m, P_a = P_b + d m.
@@ -65,6 +79,7 @@
 // the world the body's own counts, as here against a body of restitution 0).
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <utility>
 #include <vector>
@@ -105,6 +120,8 @@ class BodyContacts {
   struct Slot {  // one point of one body of an active pair, within a substep
     int point = 0;
     bool of_a = true;   // a's point in b's solid, else b's in a's
+    int feature = -1;   // two boxes: the features that touch there (box_box.hpp); -1: none yet
+    std::uint32_t stamp = 0;  // two boxes: the normal pass that last found that feature
     bool touching = false;
     double lambda_n = 0.0;
     Vec3d normal;       // world: the way a is pushed
@@ -114,6 +131,7 @@ class BodyContacts {
     int a = 0, b = 0;
     int candidate = 0;  // its index in candidates_ (the order of ties)
     int first_slot = 0, end_slot = 0;
+    int first_side_slot = 0;  // the slots from here on: a capsule's side (capsule_sides.hpp)
     double height = 0.0;    // the lower centre along -gravity
     int fixed = 0;          // shock propagation in the last normal pass: 1 a, 2 b treated as fixed, 0 neither
     double lambda_n = 0.0;  // the sum of its points' normal multipliers
@@ -144,6 +162,10 @@ class BodyContacts {
   void apply_positions(RigidBody& a, RigidBody& b, double step, int fixed) const;
   void apply_velocities(RigidBody& a, RigidBody& b, double step, int fixed) const;
   void solve_pair(Active& pair, RigidBody& a, RigidBody& b);
+  /// Two boxes: the slot of the pair that holds `feature` in this substep; else a free one, else
+  /// one whose feature touched in no pass of this iteration (its state dropped), claimed for it;
+  /// -1 where none is left.
+  int feature_slot(const Active& pair, int feature);
 
   std::vector<Body> bodies_;
   std::vector<ContactPoint> points_;
@@ -159,6 +181,7 @@ class BodyContacts {
   bool pairs_found_ = false;  // in this substep
   double h_ = 0.0;
   double rest_speed_ = 0.0;  // 2 |g| h
+  std::uint32_t pass_stamp_ = 0;  // counts the normal passes of box pairs (Slot::stamp; wraps)
 };
 
 }  // namespace seiche::rigid

@@ -4,7 +4,10 @@
 // Contact points, in the body frame, each the centre of a ball of radius rho: a box's 8
 // corners (rho = 0), a sphere's centre (rho = its radius), a capsule's two cap centres (rho = its
 // radius), a mesh body's vertices (rho = 0: a mesh touches at its vertices only, so a long edge
-// or a large face may sink into a sphere or a convex collider between them). Every iteration, body by body in scene order (serial: the same bits at any thread
+// or a large face may sink into a sphere or a convex collider between them; and a capsule touches
+// at its cap balls only, so one lying across a box collider narrower than itself falls through:
+// the side contacts of capsule_sides.hpp are between bodies only). Every iteration, body by body
+// in scene order (serial: the same bits at any thread
 // count), with a point's centre c = x + R r_c against each surface its bounding ball (its
 // extent, grown by half) reaches:
 //   normals: depth d of the ball in the surface, outward normal n (a contact where d > 0); the

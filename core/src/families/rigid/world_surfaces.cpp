@@ -104,7 +104,10 @@ bool penetration(const SolidSurface& s, Vec3d p, double r, SurfacePenetration& o
         clamped[a] = std::clamp(clamped[a], double(grid.origin[a]),
                                 double(grid.origin[a]) + double(grid.voxel) * double(grid.dims[a] - 1));
       const double outside = length(p - Vec3d{clamped[0], clamped[1], clamped[2]});
-      if (!(outside < r)) return false;
+      // Beyond the ball's reach of the box: no contact. A point (r = 0) inside the box has
+      // outside = 0 = r and is asked (with outside < r, a vertex or a box corner never touched a
+      // mesh, and the fluid boundary found no site inside a mesh body).
+      if (!(outside <= r)) return false;
       float distance = 0.0f, n[3];
       if (!grid.sample(float(clamped[0]), float(clamped[1]), float(clamped[2]), distance, n)) return false;
       const double depth = r - (double(distance) + outside);

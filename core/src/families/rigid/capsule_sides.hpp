@@ -1,0 +1,43 @@
+// The contacts of a capsule's side (its segment between the cap centres) with another capsule or
+// a box, which the capsule's contact balls at its cap centres (world_contacts.hpp) miss: two
+// capsules crossed side on side, or a capsule lying across a box's edge or over a face narrower
+// than the capsule, have no cap centre near the other body. Where a segment end is the closest
+// point, its cap ball is the contact already (a ball against a solid is exact): these add only
+// points inside the segment.
+//   Capsule against capsule: the closest points c_a = P_a + s d_a, c_b = P_b + t d_b of the two
+//     segments (r = P_a - P_b; s = ((d_a.d_b)(d_b.r) - (d_b.d_b)(d_a.r)) / D, t = ((d_a.d_a)(d_b.r)
+//     - (d_a.d_b)(d_a.r)) / D, D = |d_a|^2 |d_b|^2 - (d_a.d_b)^2), where both lie strictly inside
+//     (0 < s, t < 1; else the closest point is an end: the balls) and the segments are not
+//     parallel (D > 1e-12 |d_a|^2 |d_b|^2: parallel ones touch at an end's ball). Depth
+//     rho_a + rho_b - |c_a - c_b|, normal n = (c_a - c_b) / |c_a - c_b| (where the axes meet:
+//     their cross product turned towards x_a - x_b), a's point c_a - rho_a n, b's c_b + rho_b n.
+//   Capsule against box (in the box's frame, half sizes h; nothing where both ends lie beyond one
+//     face of the box grown by the radius, |p_k| > h_k + rho on one side): f(t) = sdf_box(A + t (B - A)) is
+//     convex (the signed distance of a convex solid), so its least t* is found by ternary search
+//     (64 steps, each keeping 2/3 of the bracket: 5e-12 of the segment). Its face: the axis k where p(t*) sticks out most,
+//     |p_k| - h_k. Like a box on a face, the segment clipped to that face's sides (|p_j| <= h_j,
+//     j != k) gives its two ends t_0 <= t_1, and the segment's points there rest on the face (a
+//     capsule across a narrower box: one at each edge); t* adds the deepest point where it is
+//     strictly below both segment ends (a capsule across an edge). Each of those inside (0, 1)
+//     is a ball of the capsule's radius against the box (world_surfaces.hpp's penetration()).
+// Every contact in a fixed role (t_0, t_1, t*; the crossing of two capsules is t*'s), so that a
+// pair's slot for it (body_contacts.hpp) keeps its meaning from one pass to the next.
+#pragma once
+
+#include "box_box.hpp"
+#include "rigid_body.hpp"
+#include "world_surfaces.hpp"
+
+namespace seiche::rigid {
+
+inline constexpr int kCapsuleSideRoles = 3;  ///< t_0, t_1, t* (above)
+
+/// Whether solids a and b (body frames) have side contacts: a capsule with a capsule or a box.
+bool has_capsule_sides(const SolidSurface& a, const SolidSurface& b);
+
+/// The side contacts of bodies a and b (solids in their body frames, has_capsule_sides()), one
+/// per role; a role without contact has depth 0. Returns how many have depth > 0.
+int capsule_side_contacts(const RigidBody& a, const SolidSurface& solid_a, const RigidBody& b,
+                          const SolidSurface& solid_b, BoxBoxContact (&out)[kCapsuleSideRoles]);
+
+}  // namespace seiche::rigid
