@@ -98,7 +98,8 @@ class JointSolver {
   void restore_tree_multipliers(std::span<const Vec3d> lambdas) { trees_.restore_multipliers(lambdas); }
   /// How many joints the tree solve takes.
   std::size_t tree_joints() const;
-  /// One iteration: the trees, then every other joint once, colour by colour.
+  /// One iteration: the trees, then every other joint once, colour by colour (and the limits
+  /// and motors of the hinges and sliders in the trees).
   void solve(std::span<RigidBody> bodies, double h);
   /// The colours of the joints the tree solve leaves (indices into joints()).
   const JointColours& colours() const { return colours_; }
@@ -128,8 +129,8 @@ class JointSolver {
 
   // Hands the ball joints, free hinges and fixed joints that form a forest to the tree solve.
   void take_trees(std::span<const RigidBody> bodies);
-  // One Gauss-Seidel step of joint j (not in a tree); inverse_h2 = 1 / h^2.
-  void solve_joint(Joint& j, std::span<RigidBody> bodies, double h, double inverse_h2);
+  // One Gauss-Seidel step of joint k (in a tree: its limit and motor only); inverse_h2 = 1 / h^2.
+  void solve_joint(std::size_t k, std::span<RigidBody> bodies, double h, double inverse_h2);
 };
 
 /// `angle` wrapped into [-pi, pi].

@@ -76,18 +76,19 @@
 
 namespace seiche::rigid {
 
-/// The joint types the tree solve takes, and their rows: 3 positional, plus 2 (hinge) or 3
-/// (fixed) angular.
-enum class TreeJointType { Ball, Hinge, Fixed };
+/// The joint types the tree solve takes, and their equality rows: ball 3 positional; hinge 3 + 2
+/// angular; fixed 3 + 3; slider 2 positional (across its axis) + 3 angular; universal 3 + 1.
+enum class TreeJointType { Ball, Hinge, Fixed, Slider, Universal };
 
-/// A joint as the tree solve sees it (joint.hpp's Joint of type ball, hinge or fixed).
+/// A joint as the tree solve sees it (joint.hpp's Joint; a hinge's or slider's limits and motor
+/// are not in it).
 struct TreeLink {
   TreeJointType type = TreeJointType::Ball;
   int body_a = -1, body_b = -1;  ///< indices into the bodies; -1: the world
   Vec3d anchor_a, anchor_b;      ///< the connector point in each body's frame
-  Vec3d axis_a, axis_b;          ///< hinge: the unit axis u in each body's frame
-  Vec3d normal_a;                ///< hinge: a unit s_a perpendicular to u_a, in body a's frame
-  Quatd rest_rotation;           ///< fixed: q_a^-1 q_b at the start
+  Vec3d axis_a, axis_b;          ///< hinge, slider: the unit axis u in each body's frame; universal: u_a, u_b
+  Vec3d normal_a;                ///< hinge, slider: a unit s_a perpendicular to u_a, in body a's frame
+  Quatd rest_rotation;           ///< fixed, slider: q_a^-1 q_b at the start
   double compliance = 0.0;       ///< m/N and rad/(N m)
 };
 
@@ -126,8 +127,10 @@ class JointTreeSolver {
     int link = -1;          ///< the parent joint (into links_); -1: a free root
     bool body_is_b = true;  ///< the body is the link's body_b
     int rows = 3;           ///< the parent joint's row count m
+    int positional = 3;     ///< how many of them are positional (the rest angular): 3, a slider's 2
     Rows lambda{};          ///< the parent joint's multiplier (N s^2 and N m s^2), within a substep
-    Vec3d previous_lambda;  ///< its positional rows at the end of the previous substep
+    Vec3d impulse;          ///< the world impulse of its positional rows now (N s^2)
+    Vec3d previous_lambda;  ///< that impulse at the end of the previous substep
   };
   // Per node, rebuilt every solve.
   struct Work {
@@ -139,6 +142,7 @@ class JointTreeSolver {
     Rows s;
     Rows b, dlambda;  // b_e, and the step of lambda_e
     double alpha = 0.0;
+    Vec3d across[2];   // a slider's t_1, t_2 at the linearization
     Vec3d x0;          // the body before the step (the line search)
     Quatd q0;
   };
