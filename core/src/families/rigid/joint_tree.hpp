@@ -1,6 +1,7 @@
-// The exact solve of the ball, hinge and fixed joints along spanning trees of the bodies, per
-// iteration: Baraff 1996 ("Linear-time dynamics using Lagrange multipliers") with 6 x 6 body
-// blocks and joint blocks of m rows (ball 3, hinge 5, fixed 6), as a position-level XPBD step
+// The exact solve of the ball, hinge, fixed, slider and universal joints (their equality rows)
+// along spanning trees of the bodies, per iteration: Baraff 1996 ("Linear-time dynamics using
+// Lagrange multipliers") with 6 x 6 body blocks and joint blocks of m rows (ball 3, universal 4,
+// hinge 5, slider 5, fixed 6), as a position-level XPBD step
 // (Deul et al. 2018). A chain of 1:1000 mass ratio hangs as stiffly as one of equal links, where
 // one Gauss-Seidel sweep moves a load about one joint and lets the heavy end stretch the chain
 // (the particles' version: kernels/distance_tree.hpp).
@@ -11,14 +12,21 @@
 //   sum_v J_ev dx_v + alpha~_e dlambda_e = b_e := -C_e - alpha~_e lambda_e   (every joint e)
 // dx_v = (dp, dtheta) the body's move and world rotation vector, M_v = diag(m I, I_world),
 // alpha~ = compliance / h^2 (every row of the joint), lambda_e an m-vector. The rows of C_e:
-//   positional (all three types)  P_b - P_a (P = x + r, r = R(q) anchor),
+//   positional (all but the slider)  P_b - P_a (P = x + r, r = R(q) anchor),
 //     J_eb = [I, -[r_b]x], J_ea = [-I, [r_a]x] (so M^-1 J^T p is the impulse p at P:
 //     x += p / m, dtheta = I^-1 (r x p), as body_correction.hpp);
+//   slider (2 positional rows, across its axis)  t_k . (P_b - P_a), t_k as the hinge's below;
+//     J_eb = [t_k^T, (r_b x t_k)^T], J_ea = -[t_k^T, ((P_b - x_a) x t_k)^T] (t_k turns with body
+//     a, so both act at P_b: body b's point slides along the axis freely); then the fixed
+//     joint's 3 angular rows;
 //   hinge (2 angular rows)  t_k . e, e = the rotation vector turning a_a = R_a u_a onto
 //     a_b = R_b u_b (joint.hpp), t_1 = R_a s_a, t_2 = R_a (u_a x s_a) (perpendicular to a_a,
 //     turning with body a); J_eb = [0, t_k^T], J_ea = [0, -t_k^T] (to first order a turn of b
 //     about t_k turns e by it, one about a_a leaves e alone);
-//   fixed (3 angular rows)  e = log(q_b (q_a q_rest)^-1) (joint.hpp); J_eb = [0, I], J_ea = [0, -I].
+//   fixed (3 angular rows)  e = log(q_b (q_a q_rest)^-1) (joint.hpp); J_eb = [0, I], J_ea = [0, -I];
+//   universal (1 angular row)  -atan2(a_a . a_b, |c|), c = a_a x a_b (the angle between the axes
+//     less 90 degrees), J_eb = [0, n^T], J_ea = [0, -n^T], n = c / |c| (t_1 where the axes are
+//     parallel).
 // With the bodies and joints a forest, eliminating from the leaves to the roots makes no
 // fill-in. Body v with parent joint e (its parent p: a body, or fixed) and child joints c
 // (child body w), leaves first:
@@ -29,13 +37,12 @@
 //   dlambda_e = s_e - D_e^-1 J_ep dx_p,   dx_v = G dlambda_e + u,   lambda_e += dlambda_e,
 // and last every body moves: x += dp, q += 1/2 [dtheta, 0] q, normalized (rotate_by_small).
 // For one joint to the world it is the m-row XPBD step dlambda = (J M^-1 J^T + alpha~)^-1 b.
-// A hinge's angle limits and motor are not rows: an inequality switched on and off from iteration
-// to iteration, and a drive with its own compliance, do not fit a fixed set of equality rows. A
-// hinge that has either keeps the iterative solve whole (joint.hpp). (Such hinges in the tree with
-// only the limit and motor corrected by Gauss-Seidel after it held scenes/ragdoll_in_cloth.json's
-// elbows and knees within 0.04 mm, 3.9 mm now, but the ragdoll then lands elsewhere and the
-// soft ball ends 1-6 cm lower in the hammock, below the line its test (AllMaterials) draws; left
-// out until that scene is looked at again.)
+// A hinge's or slider's limits and motor are not rows: an inequality switched on and off from
+// iteration to iteration, and a drive with its own compliance, do not fit a fixed set of equality
+// rows. The tree takes such a joint's equality rows, and Gauss-Seidel corrects its limit and motor
+// after the tree (joint.hpp; a hinge's limit through its anchor, hinge_limit.hpp). That holds
+// scenes/ragdoll_in_cloth.json's elbows and knees within 1.8e-4 of their length, 3.9 mm with the
+// hinges on Gauss-Seidel.
 //
 // Geometric stiffness. The linearization has no first-order stiffness of a body's rotation at
 // a loaded connector, so where a light body carries a large load (a 4 g link under a 4 kg end,
@@ -44,8 +51,9 @@
 // gets the tension part of lambda . d^2 P / d theta^2 at each of its connectors,
 //   K_v += k (I - r r^T / |r|^2)   on the rotation block,   k = max(f . r, 0),
 // f the impulse of the joint's positional rows on the body at lever r (+lambda on body_b,
-// -lambda on body_a) at the end of the previous substep (these multipliers carry across
-// substeps: the checkpoint holds them). Uncapped, unlike the particles' gamma: a cap at 4 times
+// -lambda on body_a; a slider's lambda_1 t_1 + lambda_2 t_2, at lever P_b - x_a on body a) at
+// the end of the previous substep (these impulses carry across substeps: the checkpoint holds
+// them). Uncapped, unlike the particles' gamma: a cap at 4 times
 // the body's smallest moment of inertia left the 1:1000 chain flying apart at 8 x 2; uncapped it
 // holds (and gains no energy) from 1 substep of 1 iteration per 1/60 s up. The angular rows add
 // none: at the solution (e = 0) the second derivative of a rotation-vector error is its
@@ -58,9 +66,9 @@
 // (|.| over all m rows); a tree along which no step decreases phi is left as it is.
 //
 // The forest: the graph of the movable bodies and one ground node (the world and every fixed
-// body), over the ball, hinge (without limits or motor) and fixed joints in scene order; a joint that closes a loop
-// (through the ground too: a chain hung at both ends) is left out, and it and every other joint
-// type keep the iterative solve (joint.hpp), which runs after this one. A tree per joint to the
+// body), over every joint but the distance joints in scene order; a joint that closes a loop
+// (through the ground too: a chain hung at both ends) is left out, and it and the distance joints
+// keep the iterative solve (joint.hpp), which runs after this one. A tree per joint to the
 // ground (the ground is fixed, so they are independent), then one per piece that does not reach
 // it, rooted at its lowest-numbered body; inside a tree breadth first, children in scene order.
 // Serial, one fixed order: the bits do not depend on the thread count. A forest of ball joints
@@ -108,8 +116,9 @@ class JointTreeSolver {
   /// Before the first iteration of a substep: every multiplier to 0 (the last ones kept for the
   /// geometric stiffness).
   void reset_multipliers();
-  /// The multipliers now (the checkpoint's state): each node's positional rows, then the angular
-  /// rows of each node that has them (a hinge's two padded with 0), and their restore.
+  /// The multipliers now (the checkpoint's state): each node's positional impulse (its positional
+  /// rows' multipliers; a slider's as a world vector), then the angular rows of each node that has
+  /// them (a hinge's two and a universal joint's one padded with 0), and their restore.
   std::vector<Vec3d> multipliers() const;
   void restore_multipliers(std::span<const Vec3d> lambdas);
   /// One iteration: the exact step above over every tree.
