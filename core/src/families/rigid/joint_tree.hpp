@@ -42,7 +42,8 @@
 // rows. The tree takes such a joint's equality rows, and Gauss-Seidel corrects its limit and motor
 // after the tree (joint.hpp; a hinge's limit through its anchor, hinge_limit.hpp). That holds
 // scenes/ragdoll_in_cloth.json's elbows and knees within 1.8e-4 of their length, 3.9 mm with the
-// hinges on Gauss-Seidel.
+// hinges on Gauss-Seidel; it does not hold a 1:1000 chain whose load drives every hinge into its
+// limit (docs/design.md: nor does Gauss-Seidel alone, nor did the limit as an active row here).
 //
 // Geometric stiffness. The linearization has no first-order stiffness of a body's rotation at
 // a loaded connector, so where a light body carries a large load (a 4 g link under a 4 kg end,
