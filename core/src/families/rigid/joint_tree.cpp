@@ -180,13 +180,6 @@ Vec3d lever_a(const TreeLink& j, const RigidBody& a, const RigidBody& b, Vec3d r
   return j.type == TreeJointType::Slider ? b.world_point(j.anchor_b) - a.x : r_a;
 }
 
-// The world impulse of the positional rows: lambda's first three rows, or the slider's
-// lambda_1 t_1 + lambda_2 t_2.
-Vec3d positional_impulse(const Rows& lambda, const AcrossRows& across) {
-  if (!across.slider) return {lambda[0], lambda[1], lambda[2]};
-  return lambda[0] * across.t[0] + lambda[1] * across.t[1];
-}
-
 // j z for an m x 6 j.
 template <int m>
 Rows times(const Jacobian& j, const std::array<double, 6>& z) {
@@ -314,13 +307,17 @@ JointTreeSolver::JointTreeSolver(std::span<const TreeLink> links, std::span<cons
   work_.resize(nodes_.size());
 }
 
+Vec3d JointTreeSolver::positional_impulse(const Node& n) {
+  return n.positional == 2 ? n.impulse : Vec3d{n.lambda[0], n.lambda[1], n.lambda[2]};
+}
+
 void JointTreeSolver::reset_multipliers() {
-  for (Node& n : nodes_) n.previous_lambda = n.impulse, n.impulse = {}, n.lambda = {};
+  for (Node& n : nodes_) n.previous_lambda = positional_impulse(n), n.impulse = {}, n.lambda = {};
 }
 
 std::vector<Vec3d> JointTreeSolver::multipliers() const {
   std::vector<Vec3d> lambdas;
-  for (const Node& n : nodes_) lambdas.push_back(n.impulse);
+  for (const Node& n : nodes_) lambdas.push_back(positional_impulse(n));
   for (const Node& n : nodes_) {
     const std::size_t first = std::size_t(n.positional);  // the first angular row
     if (n.rows > 3) lambdas.push_back({n.lambda[first], n.lambda[first + 1], n.lambda[first + 2]});
@@ -525,7 +522,7 @@ void JointTreeSolver::line_search(std::size_t begin, std::size_t end, std::span<
   for (std::size_t i = begin; i < end; ++i) {
     Node& n = nodes_[i];
     for (int row = 0; row < n.rows; ++row) n.lambda[std::size_t(row)] += beta * work_[i].dlambda[std::size_t(row)];
-    n.impulse = positional_impulse(n.lambda, {n.positional == 2, {work_[i].across[0], work_[i].across[1]}});
+    if (n.positional == 2) n.impulse = n.lambda[0] * work_[i].across[0] + n.lambda[1] * work_[i].across[1];
   }
 }
 

@@ -139,7 +139,7 @@ class JointTreeSolver {
     int rows = 3;           ///< the parent joint's row count m
     int positional = 3;     ///< how many of them are positional (the rest angular): 3, a slider's 2
     Rows lambda{};          ///< the parent joint's multiplier (N s^2 and N m s^2), within a substep
-    Vec3d impulse;          ///< the world impulse of its positional rows now (N s^2)
+    Vec3d impulse;          ///< a slider's: the world impulse of its 2 positional rows now (N s^2)
     Vec3d previous_lambda;  ///< that impulse at the end of the previous substep
   };
   // Per node, rebuilt every solve.
@@ -165,6 +165,9 @@ class JointTreeSolver {
   // Node i's step roots to leaves: dlambda and dx.
   template <int m>
   void substitute(std::size_t i);
+  // The world impulse of node n's positional rows: the first three multipliers, or a slider's
+  // lambda_1 t_1 + lambda_2 t_2 (kept in impulse).
+  static Vec3d positional_impulse(const Node& n);
   // The tree's part of the merit's penalty at step length beta (bodies moved there).
   double merit_penalty(std::size_t begin, std::size_t end, std::span<const RigidBody> bodies, double beta) const;
   // Moves the tree's bodies by the first of beta = 1, 1/2, ... that decreases the merit enough.
