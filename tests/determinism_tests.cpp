@@ -246,7 +246,9 @@ TEST(Golden, ClothOverBoxAfter60Frames) {
   expect_golden({"cloth_over_box.json", 60, 0x1f714e6d6f580a34ull, 0x7168b67abcb21b2cull, HashedState::ParticlesAndBodies});
 }
 TEST(Golden, HingeDoorAfter120Frames) {
-  expect_golden({"hinge_door.json", 120, 0x96d4b25569703b8aull, 0x96d4b25569703b8aull, HashedState::Bodies});
+  // The hinges in the tree, their limit corrected through the anchor (issue 17, treehinge).
+  expect_golden({"hinge_door.json", 120, 0xba07208cd258604cull, 0x96d4b25569703b8aull,  // TODO unfused
+                 HashedState::Bodies});
 }
 TEST(Golden, BoxesInWaterAfter20Frames) {
   expect_golden({"boxes_in_water.json", 20, 0x6ba90bf6e63ca8ceull, 0x45797036883b9274ull, HashedState::ParticlesAndBodies});  // TODO unfused
@@ -255,7 +257,9 @@ TEST(Golden, SoftInWaterAfter20Frames) {
   expect_golden({"soft_in_water.json", 20, 0x142a27f1a1401a13ull, 0x805299a48c7e0848ull});  // TODO unfused
 }
 TEST(Golden, RagdollInClothAfter30Frames) {
-  expect_golden({"ragdoll_in_cloth.json", 30, 0x887a905ed4bcf3b2ull, 0x06c63b8af8614821ull, HashedState::ParticlesAndBodies});  // TODO unfused
+  // The hinges in the tree, and the hammock 1.5 m wide (issue 17, treehinge).
+  expect_golden({"ragdoll_in_cloth.json", 30, 0x14be1816b80c357full, 0x06c63b8af8614821ull,  // TODO unfused
+                 HashedState::ParticlesAndBodies});
 }
 
 // The golden values' premise: a build whose instruction set has FMA fuses its multiply-adds (else

@@ -77,24 +77,26 @@ const KeyTable<SolverDef>& solver_keys() {
                "Checkpoints hold the multipliers the forests read, so a resumed bake is byte-identical. "
                "Scenes without distance constraints ignore it"),
       K("joint_trees", &SolverDef::joint_trees)
-          .doc("the ball joints, hinges without limits or motor, and fixed joints that form trees over "
-               "the rigid bodies (chains, ragdolls; a joint that "
+          .doc("the joints but distance joints (ball, hinge, fixed, slider, universal) that form trees "
+               "over the rigid bodies (chains, ragdolls; a joint that "
                "closes a loop, through the world too, is left out) solved exactly along the trees every "
                "iteration, before the other joints' Gauss-Seidel sweep: a tree carries its load to the "
                "world in one step, whatever the mass ratios along it (over 5-10 s at the default settings, "
                "max joint drift with Gauss-Seidel alone → with the trees: scenes/rigid_chain.json, 20 links "
                "with the last 1000 times heavier, 367 % → 1.5e-10 % of a link; 100 equal links 56 % → "
                "0.002 %; the same 20 links on hinges 142 % → 1.5e-10 %, their axes aligned within "
-               "1e-15 rad). With geometric stiffness from the previous substep's multipliers, which the "
+               "1e-15 rad; on universal joints 125 % → 1.5e-10 %). With geometric stiffness from the previous substep's multipliers, which the "
                "checkpoints hold; it gains no energy on that chain from 1 substep of 1 iteration per frame "
-               "up (docs/design.md). A tree whose bodies carry little load for their inertia "
-               "(pendulums, lightly loaded articulations) and on which no Gauss-Seidel joint acts takes "
-               "its step along the joints' directions at the start of the substep (SHAKE), which keeps "
-               "its energy: a double pendulum of 0.5 m boxes within 0.07 % over 10 s at the defaults, "
-               "where the end-of-step directions lose 9.8 %; heavily loaded trees (high mass ratios, "
-               "long chains) keep the end-of-step directions, which never gain energy. A loop's closing joint and the other joints (distance, slider, "
-               "universal, hinges with limits or a motor) stay with Gauss-Seidel. `false`: every joint "
-               "Gauss-Seidel. Scenes without ball, free hinge or fixed joints ignore it"),
+               "up (docs/design.md). A tree of ball, hinge and fixed joints whose bodies carry little "
+               "load for their inertia (pendulums, lightly loaded articulations) and on which no "
+               "Gauss-Seidel correction acts takes its step along the joints' directions at the start of "
+               "the substep (SHAKE), which keeps its energy: a double pendulum of 0.5 m boxes within "
+               "0.07 % over 10 s at the defaults, where the end-of-step directions lose 9.8 %; heavily "
+               "loaded trees (high mass ratios, long chains) keep the end-of-step directions, which never "
+               "gain energy. A hinge's or slider's limits and motor are corrected by Gauss-Seidel after "
+               "the trees (a hinge's limit through its anchor: an inelastic stop); a loop's closing joint "
+               "and the distance joints stay with Gauss-Seidel. `false`: every joint Gauss-Seidel. "
+               "Scenes with only distance joints ignore it"),
   };
   return keys;
 }

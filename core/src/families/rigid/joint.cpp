@@ -10,6 +10,7 @@
 #include <tbb/parallel_for.h>
 
 #include "body_correction.hpp"
+#include "hinge_limit.hpp"
 
 namespace seiche::rigid {
 
@@ -77,6 +78,32 @@ Vec3d fixed_rotation_error(const Joint& j, const RigidBody& a, const RigidBody& 
   }
 }
 
+// What the tree solve leaves of a hinge or slider in it (joint_tree.hpp): its limit (an
+// inequality) and its motor (its own compliance), by Gauss-Seidel after the tree.
+[[gnu::noinline]] void correct_limit_and_motor(Joint& j, RigidBody& a, RigidBody& b, double h, double inverse_h2) {
+  if (j.limited) {
+    const double alpha = j.compliance * inverse_h2;
+    const Vec3d axis = rotate(a.q, j.axis_a);
+    if (j.type == JointType::Hinge) {
+      const double phi = hinge_angle_of(j, a, b);
+      const double over = phi - std::clamp(phi, j.lower, j.upper);
+      if (over != 0.0)
+        correct_limit_at_anchor(a, b, rotate(a.q, j.anchor_a), rotate(b.q, j.anchor_b), axis, over, alpha, j.lambda_limit);
+    } else {
+      const double s = slider_position_of(j, a, b);
+      const double over = s - std::clamp(s, j.lower, j.upper);
+      if (over != 0.0)
+        correct_position(a, b, rotate(a.q, j.anchor_a), rotate(b.q, j.anchor_b), over * axis, alpha, j.lambda_limit);
+    }
+  }
+  if (j.motor != MotorMode::None) drive_motor(j, a, b, h, inverse_h2);
+}
+
+// Whether joint j has a part that is not an equality row: a limit or a motor.
+bool has_limit_or_motor(const Joint& j) {
+  return (j.type == JointType::Hinge || j.type == JointType::Slider) && (j.limited || j.motor != MotorMode::None);
+}
+
 }  // namespace
 
 double wrap_angle(double angle) {
@@ -104,7 +131,7 @@ JointSolver::JointSolver(std::vector<Joint> joints, std::span<const RigidBody> b
   std::vector<JointEnds> ends;
   const auto movable = [&](int body) { return body >= 0 && !bodies[std::size_t(body)].fixed() ? body : -1; };
   for (std::size_t k = 0; k < joints_.size(); ++k)
-    if (!in_tree_[k]) ends.push_back({k, movable(joints_[k].body_a), movable(joints_[k].body_b)});
+    if (!in_tree_[k] || has_limit_or_motor(joints_[k])) ends.push_back({k, movable(joints_[k].body_a), movable(joints_[k].body_b)});
   colours_ = JointColours(ends, bodies.size());
 }
 
@@ -113,19 +140,27 @@ void JointSolver::take_trees(std::span<const RigidBody> bodies, Vec3d gravity) {
   std::vector<std::size_t> joint_of;
   for (std::size_t k = 0; k < joints_.size(); ++k) {
     const Joint& j = joints_[k];
-    const bool free_hinge = j.type == JointType::Hinge && !j.limited && j.motor == MotorMode::None;
-    if (j.type != JointType::Ball && !free_hinge && j.type != JointType::Fixed) continue;
-    const TreeJointType type = j.type == JointType::Ball    ? TreeJointType::Ball
-                               : j.type == JointType::Hinge ? TreeJointType::Hinge
-                                                            : TreeJointType::Fixed;
+    if (j.type == JointType::Distance) continue;  // an inequality: Gauss-Seidel
+    const TreeJointType type = j.type == JointType::Ball        ? TreeJointType::Ball
+                               : j.type == JointType::Hinge     ? TreeJointType::Hinge
+                               : j.type == JointType::Fixed     ? TreeJointType::Fixed
+                               : j.type == JointType::Slider    ? TreeJointType::Slider
+                                                                : TreeJointType::Universal;
     links.push_back({type, j.body_a, j.body_b, j.anchor_a, j.anchor_b, j.axis_a, j.axis_b, j.normal_a, j.rest_rotation,
                      j.compliance});
     joint_of.push_back(k);
   }
   trees_ = JointTreeSolver(links, bodies, gravity);
   for (std::size_t l = 0; l < links.size(); ++l) in_tree_[joint_of[l]] = trees_.in_forest(l) ? 1 : 0;
-  for (std::size_t k = 0; k < joints_.size(); ++k)
-    if (!in_tree_[k]) trees_.keep_end_directions_at(joints_[k].body_a), trees_.keep_end_directions_at(joints_[k].body_b);
+  // The start directions only where no Gauss-Seidel correction acts on a tree's bodies (a joint
+  // left out, a limit, a motor) and only over the joint types they were measured with (ball,
+  // hinge, fixed; joint_tree.hpp).
+  for (std::size_t k = 0; k < joints_.size(); ++k) {
+    const Joint& j = joints_[k];
+    const bool measured_type = j.type == JointType::Ball || j.type == JointType::Hinge || j.type == JointType::Fixed;
+    if (!in_tree_[k] || has_limit_or_motor(j) || !measured_type)
+      trees_.keep_end_directions_at(j.body_a), trees_.keep_end_directions_at(j.body_b);
+  }
 }
 
 std::size_t JointSolver::tree_joints() const { return std::size_t(std::count(in_tree_.begin(), in_tree_.end(), 1)); }
@@ -147,20 +182,22 @@ void JointSolver::solve(std::span<RigidBody> bodies, double h) {
   for (std::size_t c = 0; c < colours_.colour_count(); ++c) {
     const std::span<const std::size_t> members = colours_.colour(c);
     if (members.size() < kParallelColour) {
-      for (std::size_t k : members) solve_joint(joints_[k], bodies, h, inverse_h2);
+      for (std::size_t k : members) solve_joint(k, bodies, h, inverse_h2);
       continue;
     }
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, members.size(), kParallelGrain), [&](const auto& range) {
-      for (std::size_t i = range.begin(); i != range.end(); ++i) solve_joint(joints_[members[i]], bodies, h, inverse_h2);
+      for (std::size_t i = range.begin(); i != range.end(); ++i) solve_joint(members[i], bodies, h, inverse_h2);
     });
   }
 }
 
 // Inlined into both loops of solve (with positional_error), the rarer parts out of line: the
 // joint loop as fast as the single serial loop it replaced (measured, 1000 hinges).
-[[gnu::always_inline]] inline void JointSolver::solve_joint(Joint& j, std::span<RigidBody> bodies, double h, double inverse_h2) {
+[[gnu::always_inline]] inline void JointSolver::solve_joint(std::size_t k, std::span<RigidBody> bodies, double h, double inverse_h2) {
+  Joint& j = joints_[k];
   RigidBody& a = j.body_a < 0 ? world_ : bodies[std::size_t(j.body_a)];
   RigidBody& b = j.body_b < 0 ? world_ : bodies[std::size_t(j.body_b)];
+  if (in_tree_[k]) return correct_limit_and_motor(j, a, b, h, inverse_h2);
   const double alpha = j.compliance * inverse_h2;
   if (j.type == JointType::Hinge) {
     correct_rotation(a, b, rotation_between(rotate(a.q, j.axis_a), rotate(b.q, j.axis_b)), alpha, j.lambda_align);

@@ -26,10 +26,11 @@
 //           with body a about any axis perpendicular to both, and freely about each.
 // A body index of -1 is the world (a fixed body at the origin, unrotated), whose "body frame" is
 // the world frame.
-// With the tree solve on (solver.joint_trees), the ball joints, the hinges without limits or
-// motor, and the fixed joints that form a forest are solved first, exactly along their trees
-// (joint_tree.hpp); the rest (the other types, the hinges with limits or a motor, and the joints
-// that close loops) are then solved by Gauss-Seidel in colours (joint_colours.hpp): the
+// With the tree solve on (solver.joint_trees), the joints but the distance joints that form a
+// forest are solved first, exactly along their trees (joint_tree.hpp: their equality rows); the
+// rest (the distance joints, the joints that close loops, and the limits and motors of the hinges
+// and sliders in the trees: a hinge's limit through its anchor, hinge_limit.hpp) are then solved
+// by Gauss-Seidel in colours (joint_colours.hpp): the
 // joints of one colour share no movable body, and each joint's colour is one more than the
 // highest of the earlier joints (scene order) it shares a movable body with, so that solving
 // the colours in order gives the bits of the serial solve in scene order, at any thread count.
@@ -82,8 +83,8 @@ class JointSolver {
   /// A colour of at least this many joints is solved in parallel, in blocks of kParallelGrain.
   static constexpr std::size_t kParallelColour = 256, kParallelGrain = 64;
   JointSolver() = default;
-  /// With `trees`, the ball joints, hinges without limits or motor, and fixed joints that form a
-  /// forest over `bodies` take the tree solve.
+  /// With `trees`, the joints but the distance joints that form a forest over `bodies` take the
+  /// tree solve (a hinge's or slider's limit and motor stay with Gauss-Seidel, after it).
   /// `gravity` sets the load the tree solve expects on its joints (joint_tree.hpp).
   JointSolver(std::vector<Joint> joints, std::span<const RigidBody> bodies, bool trees, Vec3d gravity = {});
 
@@ -99,7 +100,8 @@ class JointSolver {
   void restore_tree_multipliers(std::span<const Vec3d> lambdas) { trees_.restore_multipliers(lambdas); }
   /// How many joints the tree solve takes.
   std::size_t tree_joints() const;
-  /// One iteration: the trees, then every other joint once, colour by colour.
+  /// One iteration: the trees, then every other joint once, colour by colour (and the limits
+  /// and motors of the hinges and sliders in the trees).
   void solve(std::span<RigidBody> bodies, double h);
   /// The colours of the joints the tree solve leaves (indices into joints()).
   const JointColours& colours() const { return colours_; }
@@ -127,10 +129,10 @@ class JointSolver {
   JointColours colours_;       // of the others
   RigidBody world_;  // fixed, at the origin, unrotated
 
-  // Hands the ball joints, free hinges and fixed joints that form a forest to the tree solve.
+  // Hands the joints but the distance joints that form a forest to the tree solve.
   void take_trees(std::span<const RigidBody> bodies, Vec3d gravity);
-  // One Gauss-Seidel step of joint j (not in a tree); inverse_h2 = 1 / h^2.
-  void solve_joint(Joint& j, std::span<RigidBody> bodies, double h, double inverse_h2);
+  // One Gauss-Seidel step of joint k (in a tree: its limit and motor only); inverse_h2 = 1 / h^2.
+  void solve_joint(std::size_t k, std::span<RigidBody> bodies, double h, double inverse_h2);
 };
 
 /// `angle` wrapped into [-pi, pi].

@@ -82,34 +82,69 @@ using Rows = std::array<double, 6>;
 using Jacobian = std::array<double, 36>;  // m x 6, row-major
 
 // The directions of a joint's angular rows (joint_tree.hpp): the hinge's two t_k, the fixed
-// joint's world axes.
+// joint's and slider's world axes, the universal joint's n.
 struct AngularRows {
   int count = 0;
   Vec3d t[3];
 };
 
-AngularRows angular_rows(const TreeLink& j, Quatd q_a) {
+AngularRows angular_rows(const TreeLink& j, const RigidBody& a, const RigidBody& b) {
   if (j.type == TreeJointType::Hinge)
-    return {2, {rotate(q_a, j.normal_a), rotate(q_a, cross(j.axis_a, j.normal_a)), {}}};
-  if (j.type == TreeJointType::Fixed) return {3, {{1.0, 0.0, 0.0}, {0.0, 1.0, 0.0}, {0.0, 0.0, 1.0}}};
+    return {2, {rotate(a.q, j.normal_a), rotate(a.q, cross(j.axis_a, j.normal_a)), {}}};
+  if (j.type == TreeJointType::Fixed || j.type == TreeJointType::Slider)
+    return {3, {{1.0, 0.0, 0.0}, {0.0, 1.0, 0.0}, {0.0, 0.0, 1.0}}};
+  if (j.type == TreeJointType::Universal) {
+    // n = a_a x a_b / |a_a x a_b|; with the axes parallel (no direction preferred), t_1 above.
+    const Vec3d axis_a = rotate(a.q, j.axis_a);
+    const Vec3d c = cross(axis_a, rotate(b.q, j.axis_b));
+    const double s = length(c);
+    return {1, {s > 0.0 ? (1.0 / s) * c : rotate(a.q, j.normal_a), {}, {}}};
+  }
   return {};
 }
 
+// The slider's positional rows: the directions t_1 = R_a s_a, t_2 = R_a (u_a x s_a) across its
+// axis (none for the other types, whose three rows are the world axes).
+struct AcrossRows {
+  bool slider = false;
+  Vec3d t[2];
+};
+
+AcrossRows across_rows(const TreeLink& j, const RigidBody& a) {
+  if (j.type != TreeJointType::Slider) return {};
+  return {true, {rotate(a.q, j.normal_a), rotate(a.q, cross(j.axis_a, j.normal_a))}};
+}
+
+int positional_rows(TreeJointType type) { return type == TreeJointType::Slider ? 2 : 3; }
+
 // The joint's rows for one of its bodies: sign [I, -[r]x] (the connector point's move, times
-// sign, for a body move (dp, dtheta)), then sign [0, t_k^T] per angular row.
-Jacobian link_jacobian(double sign, Vec3d r, const AngularRows& angular) {
+// sign, for a body move (dp, dtheta)), or the slider's sign [t_k^T, (r x t_k)^T]; then sign
+// [0, t_k^T] per angular row. r: the body's lever (for a slider's body a, to P_b: joint_tree.hpp).
+Jacobian link_jacobian(double sign, Vec3d r, const AcrossRows& across, const AngularRows& angular) {
   Jacobian j{sign, 0.0,  0.0,  0.0,         sign * r.z,  -sign * r.y,  //
              0.0,  sign, 0.0,  -sign * r.z, 0.0,         sign * r.x,   //
              0.0,  0.0,  sign, sign * r.y,  -sign * r.x, 0.0};
+  int first_angular = 3;
+  if (across.slider) {
+    j = {};
+    for (int k = 0; k < 2; ++k) {
+      const Vec3d t = sign * across.t[k], turn = cross(r, t);
+      const double row[6] = {t.x, t.y, t.z, turn.x, turn.y, turn.z};
+      for (int c = 0; c < 6; ++c) j[std::size_t(k * 6 + c)] = row[c];
+    }
+    first_angular = 2;
+  }
   for (int k = 0; k < angular.count; ++k) {
     const Vec3d t = sign * angular.t[k];
-    j[std::size_t((3 + k) * 6 + 3)] = t.x, j[std::size_t((3 + k) * 6 + 4)] = t.y, j[std::size_t((3 + k) * 6 + 5)] = t.z;
+    const int row = first_angular + k;
+    j[std::size_t(row * 6 + 3)] = t.x, j[std::size_t(row * 6 + 4)] = t.y, j[std::size_t(row * 6 + 5)] = t.z;
   }
   return j;
 }
 
-// C_e on the bodies as they are: P_b - P_a, then the angular rows.
-Rows link_error(const TreeLink& j, const RigidBody& a, const RigidBody& b, const AngularRows& angular) {
+// C_e on the bodies as they are: P_b - P_a (the slider's across its axis), then the angular rows.
+Rows link_error(const TreeLink& j, const RigidBody& a, const RigidBody& b, const AcrossRows& across,
+                const AngularRows& angular) {
   const Vec3d d = b.world_point(j.anchor_b) - a.world_point(j.anchor_a);
   Rows c{d.x, d.y, d.z, 0.0, 0.0, 0.0};
   if (j.type == TreeJointType::Hinge) {
@@ -118,11 +153,33 @@ Rows link_error(const TreeLink& j, const RigidBody& a, const RigidBody& b, const
   } else if (j.type == TreeJointType::Fixed) {
     const Vec3d e = rotation_vector(b.q * conjugate(a.q * j.rest_rotation));
     c[3] = e.x, c[4] = e.y, c[5] = e.z;
+  } else if (j.type == TreeJointType::Slider) {
+    const Vec3d e = rotation_vector(b.q * conjugate(a.q * j.rest_rotation));
+    c = {dot(across.t[0], d), dot(across.t[1], d), e.x, e.y, e.z, 0.0};
+  } else if (j.type == TreeJointType::Universal) {
+    // The angle between the axes less 90 degrees (joint.hpp's off-perpendicular error along n).
+    const Vec3d axis_a = rotate(a.q, j.axis_a), axis_b = rotate(b.q, j.axis_b);
+    c[3] = -portable_atan2(dot(axis_a, axis_b), length(cross(axis_a, axis_b)));
   }
   return c;
 }
 
-int rows_of(TreeJointType type) { return type == TreeJointType::Ball ? 3 : type == TreeJointType::Hinge ? 5 : 6; }
+int rows_of(TreeJointType type) {
+  switch (type) {
+    case TreeJointType::Ball: return 3;
+    case TreeJointType::Universal: return 4;
+    case TreeJointType::Hinge:
+    case TreeJointType::Slider: return 5;
+    case TreeJointType::Fixed: return 6;
+  }
+  return 3;
+}
+
+// The lever of body a's rows: r_a, but for a slider P_b - x_a (its rows across the axis turn with
+// body a, so they act at P_b on both bodies: joint_tree.hpp).
+Vec3d lever_a(const TreeLink& j, const RigidBody& a, const RigidBody& b, Vec3d r_a) {
+  return j.type == TreeJointType::Slider ? b.world_point(j.anchor_b) - a.x : r_a;
+}
 
 // j z for an m x 6 j.
 template <int m>
@@ -236,13 +293,16 @@ JointTreeSolver::JointTreeSolver(std::span<const TreeLink> links, std::span<cons
     adjacent[std::size_t(b)].push_back({a, int(e)});
   }
   std::vector<char> seen(std::size_t(ground) + 1, 0);
+  const auto node_of_link = [&](int body, int parent, int e) {
+    const TreeJointType type = links_[std::size_t(e)].type;
+    return Node{body, parent, e, links_[std::size_t(e)].body_b == body, rows_of(type), positional_rows(type), {}, {}, {}};
+  };
   const auto grow = [&](std::size_t from) {  // breadth first from the nodes pushed since `from`
     for (std::size_t p = from; p < nodes_.size(); ++p)
       for (const auto& [other, e] : adjacent[std::size_t(nodes_[p].body)])
         if (!seen[std::size_t(other)]) {
           seen[std::size_t(other)] = 1;
-          nodes_.push_back({other, int(p), e, links_[std::size_t(e)].body_b == other,
-                            rows_of(links_[std::size_t(e)].type), {}, {}});
+          nodes_.push_back(node_of_link(other, int(p), e));
         }
   };
   // One tree per joint to the ground (the ground is fixed, so they are independent), then one
@@ -252,14 +312,14 @@ JointTreeSolver::JointTreeSolver(std::span<const TreeLink> links, std::span<cons
   for (const auto& [other, e] : adjacent[std::size_t(ground)]) {
     if (seen[std::size_t(other)]) continue;
     seen[std::size_t(other)] = 1;
-    nodes_.push_back({other, -1, e, links_[std::size_t(e)].body_b == other, rows_of(links_[std::size_t(e)].type), {}, {}});
+    nodes_.push_back(node_of_link(other, -1, e));
     grow(tree_start_.back());
     tree_start_.push_back(nodes_.size());
   }
   for (int v = 0; v < ground; ++v) {
     if (seen[std::size_t(v)] || adjacent[std::size_t(v)].empty()) continue;
     seen[std::size_t(v)] = 1;
-    nodes_.push_back({v, -1, -1, true, 3, {}, {}});
+    nodes_.push_back({v, -1, -1, true, 3, 3, {}, {}, {}});
     grow(tree_start_.back());
     tree_start_.push_back(nodes_.size());
   }
@@ -308,25 +368,36 @@ bool JointTreeSolver::start_directions(std::size_t t, double h) {
   return worst < kStartDirectionsLoad;
 }
 
+Vec3d JointTreeSolver::positional_impulse(const Node& n) {
+  return n.positional == 2 ? n.impulse : Vec3d{n.lambda[0], n.lambda[1], n.lambda[2]};
+}
+
 void JointTreeSolver::reset_multipliers() {
-  for (Node& n : nodes_) n.previous_lambda = {n.lambda[0], n.lambda[1], n.lambda[2]}, n.lambda = {};
+  for (Node& n : nodes_) n.previous_lambda = positional_impulse(n), n.impulse = {}, n.lambda = {};
 }
 
 std::vector<Vec3d> JointTreeSolver::multipliers() const {
   std::vector<Vec3d> lambdas;
-  for (const Node& n : nodes_) lambdas.push_back({n.lambda[0], n.lambda[1], n.lambda[2]});
-  for (const Node& n : nodes_)
-    if (n.rows > 3) lambdas.push_back({n.lambda[3], n.lambda[4], n.lambda[5]});
+  for (const Node& n : nodes_) lambdas.push_back(positional_impulse(n));
+  for (const Node& n : nodes_) {
+    const std::size_t first = std::size_t(n.positional);  // the first angular row
+    if (n.rows > 3) lambdas.push_back({n.lambda[first], n.lambda[first + 1], n.lambda[first + 2]});
+  }
   return lambdas;
 }
 
 void JointTreeSolver::restore_multipliers(std::span<const Vec3d> lambdas) {
   std::size_t next = 0;
   for (Node& n : nodes_)
-    if (next < lambdas.size()) n.lambda[0] = lambdas[next].x, n.lambda[1] = lambdas[next].y, n.lambda[2] = lambdas[next].z, ++next;
-  for (Node& n : nodes_)
+    if (next < lambdas.size()) {
+      n.impulse = lambdas[next++];
+      if (n.positional == 3) n.lambda[0] = n.impulse.x, n.lambda[1] = n.impulse.y, n.lambda[2] = n.impulse.z;
+    }
+  for (Node& n : nodes_) {
+    const std::size_t first = std::size_t(n.positional);
     if (n.rows > 3 && next < lambdas.size())
-      n.lambda[3] = lambdas[next].x, n.lambda[4] = lambdas[next].y, n.lambda[5] = lambdas[next].z, ++next;
+      n.lambda[first] = lambdas[next].x, n.lambda[first + 1] = lambdas[next].y, n.lambda[first + 2] = lambdas[next].z, ++next;
+  }
 }
 
 template <int m>
@@ -334,12 +405,19 @@ bool JointTreeSolver::eliminate(std::size_t i, const RigidBody& a, const RigidBo
   const Node& n = nodes_[i];
   Work& w = work_[i];
   const TreeLink& j = links_[std::size_t(n.link)];
-  // The rows' directions: at the start of the substep, or as the bodies are now.
-  const Quatd q_a = start ? a.q_prev : a.q, q_b = start ? b.q_prev : b.q;
-  const Vec3d r_a = rotate(q_a, j.anchor_a), r_b = rotate(q_b, j.anchor_b);
-  const AngularRows directions = angular_rows(j, q_a);
-  const Jacobian own = n.body_is_b ? link_jacobian(1.0, r_b, directions) : link_jacobian(-1.0, r_a, directions);
-  w.jp = n.parent < 0 ? Jacobian{} : n.body_is_b ? link_jacobian(-1.0, r_a, directions) : link_jacobian(1.0, r_b, directions);
+  // The rows' directions: at the start of the substep (the bodies turned back to q_prev), or as
+  // the bodies are now.
+  RigidBody a_start, b_start;
+  if (start) a_start = a, b_start = b, a_start.q = a.q_prev, b_start.q = b.q_prev;
+  const RigidBody& da = start ? a_start : a;
+  const RigidBody& db = start ? b_start : b;
+  const Vec3d r_a = lever_a(j, da, db, rotate(da.q, j.anchor_a)), r_b = rotate(db.q, j.anchor_b);
+  const AcrossRows across = across_rows(j, da);
+  const AngularRows angular = angular_rows(j, da, db);
+  w.across[0] = across.t[0], w.across[1] = across.t[1];
+  const Jacobian own = n.body_is_b ? link_jacobian(1.0, r_b, across, angular) : link_jacobian(-1.0, r_a, across, angular);
+  w.jp = n.parent < 0                ? Jacobian{}
+         : n.body_is_b ? link_jacobian(-1.0, r_a, across, angular) : link_jacobian(1.0, r_b, across, angular);
   for (int c = 0; c < m; ++c) {  // G = K^-1 J_ev^T, column by column
     const Vec6 column = cholesky_solve<6>(w.k, {own[std::size_t(c * 6)], own[std::size_t(c * 6 + 1)], own[std::size_t(c * 6 + 2)],
                                                 own[std::size_t(c * 6 + 3)], own[std::size_t(c * 6 + 4)], own[std::size_t(c * 6 + 5)]});
@@ -361,7 +439,7 @@ bool JointTreeSolver::eliminate(std::size_t i, const RigidBody& a, const RigidBo
     for (int row = 0; row < m; ++row) w.d_inv[std::size_t(row * m + c)] = column[std::size_t(row)];
   }
   w.alpha = alpha;
-  const Rows error = link_error(j, a, b, start ? angular_rows(j, a.q) : directions);
+  const Rows error = start ? link_error(j, a, b, across_rows(j, a), angular_rows(j, a, b)) : link_error(j, a, b, across, angular);
   const Rows moved = times<m>(own, w.u);
   Rows rest{};
   for (int row = 0; row < m; ++row) {
@@ -422,7 +500,7 @@ void JointTreeSolver::solve(std::span<RigidBody> bodies, double h) {
     if (n.link < 0 || work_[i].start) continue;
     const TreeLink& j = links_[std::size_t(n.link)];
     const RigidBody &a = body(j.body_a), &b = body(j.body_b);
-    const Vec3d r_a = rotate(a.q, j.anchor_a), r_b = rotate(b.q, j.anchor_b);
+    const Vec3d r_a = lever_a(j, a, b, rotate(a.q, j.anchor_a)), r_b = rotate(b.q, j.anchor_b);
     // The impulse on b is +lambda, on a -lambda.
     add_geometric_stiffness(work_[i].k, n.body_is_b ? r_b : r_a, n.body_is_b ? n.previous_lambda : -n.previous_lambda);
     if (n.parent >= 0)
@@ -440,6 +518,7 @@ void JointTreeSolver::solve(std::span<RigidBody> bodies, double h) {
     const TreeLink& j = links_[std::size_t(n.link)];
     const RigidBody &a = body(j.body_a), &b = body(j.body_b);
     const bool factored = n.rows == 3   ? eliminate<3>(i, a, b, inverse_h2, w.start)
+                          : n.rows == 4 ? eliminate<4>(i, a, b, inverse_h2, w.start)
                           : n.rows == 5 ? eliminate<5>(i, a, b, inverse_h2, w.start)
                                         : eliminate<6>(i, a, b, inverse_h2, w.start);
     if (!factored) return;
@@ -452,6 +531,7 @@ void JointTreeSolver::solve(std::span<RigidBody> bodies, double h) {
       continue;
     }
     if (n.rows == 3) substitute<3>(i);
+    else if (n.rows == 4) substitute<4>(i);
     else if (n.rows == 5) substitute<5>(i);
     else substitute<6>(i);
   }
@@ -469,7 +549,7 @@ double JointTreeSolver::merit_penalty(std::size_t begin, std::size_t end, std::s
     const Work& w = work_[i];
     const TreeLink& j = links_[std::size_t(n.link)];
     const RigidBody &a = body(j.body_a), &b = body(j.body_b);
-    const Rows error = link_error(j, a, b, angular_rows(j, a.q));
+    const Rows error = link_error(j, a, b, across_rows(j, a), angular_rows(j, a, b));
     Rows residual{};
     for (int row = 0; row < n.rows; ++row)
       residual[std::size_t(row)] = error[std::size_t(row)] + w.alpha * (n.lambda[std::size_t(row)] + beta * w.dlambda[std::size_t(row)]);
@@ -511,8 +591,11 @@ void JointTreeSolver::line_search(std::size_t begin, std::size_t end, std::span<
     }
     beta *= 0.5;
   }
-  for (std::size_t i = begin; i < end; ++i)
-    for (int row = 0; row < nodes_[i].rows; ++row) nodes_[i].lambda[std::size_t(row)] += beta * work_[i].dlambda[std::size_t(row)];
+  for (std::size_t i = begin; i < end; ++i) {
+    Node& n = nodes_[i];
+    for (int row = 0; row < n.rows; ++row) n.lambda[std::size_t(row)] += beta * work_[i].dlambda[std::size_t(row)];
+    if (n.positional == 2) n.impulse = n.lambda[0] * work_[i].across[0] + n.lambda[1] * work_[i].across[1];
+  }
 }
 
 }  // namespace seiche::rigid

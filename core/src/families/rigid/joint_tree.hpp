@@ -1,6 +1,7 @@
-// The exact solve of the ball, hinge and fixed joints along spanning trees of the bodies, per
-// iteration: Baraff 1996 ("Linear-time dynamics using Lagrange multipliers") with 6 x 6 body
-// blocks and joint blocks of m rows (ball 3, hinge 5, fixed 6), as a position-level XPBD step
+// The exact solve of the ball, hinge, fixed, slider and universal joints (their equality rows)
+// along spanning trees of the bodies, per iteration: Baraff 1996 ("Linear-time dynamics using
+// Lagrange multipliers") with 6 x 6 body blocks and joint blocks of m rows (ball 3, universal 4,
+// hinge 5, slider 5, fixed 6), as a position-level XPBD step
 // (Deul et al. 2018). A chain of 1:1000 mass ratio hangs as stiffly as one of equal links, where
 // one Gauss-Seidel sweep moves a load about one joint and lets the heavy end stretch the chain
 // (the particles' version: kernels/distance_tree.hpp).
@@ -12,14 +13,21 @@
 //   sum_v J_ev dx_v + alpha~_e dlambda_e = b_e := -C_e - alpha~_e lambda_e   (every joint e)
 // dx_v = (dp, dtheta) the body's move and world rotation vector, M_v = diag(m I, I_world),
 // alpha~ = compliance / h^2 (every row of the joint), lambda_e an m-vector. The rows of C_e:
-//   positional (all three types)  P_b - P_a (P = x + r, r = R(q) anchor),
+//   positional (all but the slider)  P_b - P_a (P = x + r, r = R(q) anchor),
 //     J_eb = [I, -[r_b]x], J_ea = [-I, [r_a]x] (so M^-1 J^T p is the impulse p at P:
 //     x += p / m, dtheta = I^-1 (r x p), as body_correction.hpp);
+//   slider (2 positional rows, across its axis)  t_k . (P_b - P_a), t_k as the hinge's below;
+//     J_eb = [t_k^T, (r_b x t_k)^T], J_ea = -[t_k^T, ((P_b - x_a) x t_k)^T] (t_k turns with body
+//     a, so both act at P_b: body b's point slides along the axis freely); then the fixed
+//     joint's 3 angular rows;
 //   hinge (2 angular rows)  t_k . e, e = the rotation vector turning a_a = R_a u_a onto
 //     a_b = R_b u_b (joint.hpp), t_1 = R_a s_a, t_2 = R_a (u_a x s_a) (perpendicular to a_a,
 //     turning with body a); J_eb = [0, t_k^T], J_ea = [0, -t_k^T] (to first order a turn of b
 //     about t_k turns e by it, one about a_a leaves e alone);
-//   fixed (3 angular rows)  e = log(q_b (q_a q_rest)^-1) (joint.hpp); J_eb = [0, I], J_ea = [0, -I].
+//   fixed (3 angular rows)  e = log(q_b (q_a q_rest)^-1) (joint.hpp); J_eb = [0, I], J_ea = [0, -I];
+//   universal (1 angular row)  -atan2(a_a . a_b, |c|), c = a_a x a_b (the angle between the axes
+//     less 90 degrees), J_eb = [0, n^T], J_ea = [0, -n^T], n = c / |c| (t_1 where the axes are
+//     parallel).
 // With the bodies and joints a forest, eliminating from the leaves to the roots makes no
 // fill-in. Body v with parent joint e (its parent p: a body, or fixed) and child joints c
 // (child body w), leaves first:
@@ -30,13 +38,13 @@
 //   dlambda_e = s_e - D_e^-1 J_ep dx_p,   dx_v = G dlambda_e + u,   lambda_e += dlambda_e,
 // and last every body moves: x += dp, q += 1/2 [dtheta, 0] q, normalized (rotate_by_small).
 // For one joint to the world it is the m-row XPBD step dlambda = (J M^-1 J^T + alpha~)^-1 b.
-// A hinge's angle limits and motor are not rows: an inequality switched on and off from iteration
-// to iteration, and a drive with its own compliance, do not fit a fixed set of equality rows. A
-// hinge that has either keeps the iterative solve whole (joint.hpp). (Such hinges in the tree with
-// only the limit and motor corrected by Gauss-Seidel after it held scenes/ragdoll_in_cloth.json's
-// elbows and knees within 0.04 mm, 3.9 mm now, but the ragdoll then lands elsewhere and the
-// soft ball ends 1-6 cm lower in the hammock, below the line its test (AllMaterials) draws; left
-// out until that scene is looked at again.)
+// A hinge's or slider's limits and motor are not rows: an inequality switched on and off from
+// iteration to iteration, and a drive with its own compliance, do not fit a fixed set of equality
+// rows. The tree takes such a joint's equality rows, and Gauss-Seidel corrects its limit and motor
+// after the tree (joint.hpp; a hinge's limit through its anchor, hinge_limit.hpp). That holds
+// scenes/ragdoll_in_cloth.json's elbows and knees within 1.8e-4 of their length, 3.9 mm with the
+// hinges on Gauss-Seidel; it does not hold a 1:1000 chain whose load drives every hinge into its
+// limit (docs/design.md: nor does Gauss-Seidel alone, nor did the limit as an active row here).
 //
 // Geometric stiffness. The linearization has no first-order stiffness of a body's rotation at
 // a loaded connector, so where a light body carries a large load (a 4 g link under a 4 kg end,
@@ -45,8 +53,9 @@
 // gets the tension part of lambda . d^2 P / d theta^2 at each of its connectors,
 //   K_v += k (I - r r^T / |r|^2)   on the rotation block,   k = max(f . r, 0),
 // f the impulse of the joint's positional rows on the body at lever r (+lambda on body_b,
-// -lambda on body_a) at the end of the previous substep (these multipliers carry across
-// substeps: the checkpoint holds them). Uncapped, unlike the particles' gamma: a cap at 4 times
+// -lambda on body_a; a slider's lambda_1 t_1 + lambda_2 t_2, at lever P_b - x_a on body a) at
+// the end of the previous substep (these impulses carry across substeps: the checkpoint holds
+// them). Uncapped, unlike the particles' gamma: a cap at 4 times
 // the body's smallest moment of inertia left the 1:1000 chain flying apart at 8 x 2; uncapped it
 // holds (and gains no energy) from 1 substep of 1 iteration per 1/60 s up. The angular rows add
 // none: at the solution (e = 0) the second derivative of a rotation-vector error is its
@@ -78,17 +87,19 @@
 // of the subtree it carries (a pendulum let go from horizontal pulls 3 m g at the bottom; it
 // keeps a tree that is about to carry a load on the end directions while its multipliers are
 // still 0). Measured at 8 x 2: the double pendulum 0.03 at most, the triple 0.3; the Y at least
-// 1.3, the 100-link chain 2.9, the 1:1000 chains 30. And only where no joint of the iterative
-// solve acts on the tree's bodies (a loop's closing joint, another type): Gauss-Seidel after the
-// tree and the start directions together gained 1.1 % of m g L on the ring. The test reads
+// 1.3, the 100-link chain 2.9, the 1:1000 chains 30. And only where no Gauss-Seidel correction
+// acts on the tree's bodies (a loop's closing joint, a distance joint, a hinge's or slider's limit
+// or motor: Gauss-Seidel after the tree and the start directions together gained 1.1 % of m g L
+// on the ring) and every joint of the tree is a ball, hinge or fixed joint (the types measured;
+// joint.cpp decides both). The test reads
 // only the multipliers and the scene, so the bits do not depend on the thread count and a
 // resumed run goes on bit for bit; a tree on the end directions runs the operations it ran
 // before.
 //
 // The forest: the graph of the movable bodies and one ground node (the world and every fixed
-// body), over the ball, hinge (without limits or motor) and fixed joints in scene order; a joint that closes a loop
-// (through the ground too: a chain hung at both ends) is left out, and it and every other joint
-// type keep the iterative solve (joint.hpp), which runs after this one. A tree per joint to the
+// body), over every joint but the distance joints in scene order; a joint that closes a loop
+// (through the ground too: a chain hung at both ends) is left out, and it and the distance joints
+// keep the iterative solve (joint.hpp), which runs after this one. A tree per joint to the
 // ground (the ground is fixed, so they are independent), then one per piece that does not reach
 // it, rooted at its lowest-numbered body; inside a tree breadth first, children in scene order.
 // Serial, one fixed order: the bits do not depend on the thread count. A forest of ball joints
@@ -104,18 +115,19 @@
 
 namespace seiche::rigid {
 
-/// The joint types the tree solve takes, and their rows: 3 positional, plus 2 (hinge) or 3
-/// (fixed) angular.
-enum class TreeJointType { Ball, Hinge, Fixed };
+/// The joint types the tree solve takes, and their equality rows: ball 3 positional; hinge 3 + 2
+/// angular; fixed 3 + 3; slider 2 positional (across its axis) + 3 angular; universal 3 + 1.
+enum class TreeJointType { Ball, Hinge, Fixed, Slider, Universal };
 
-/// A joint as the tree solve sees it (joint.hpp's Joint of type ball, hinge or fixed).
+/// A joint as the tree solve sees it (joint.hpp's Joint; a hinge's or slider's limits and motor
+/// are not in it).
 struct TreeLink {
   TreeJointType type = TreeJointType::Ball;
   int body_a = -1, body_b = -1;  ///< indices into the bodies; -1: the world
   Vec3d anchor_a, anchor_b;      ///< the connector point in each body's frame
-  Vec3d axis_a, axis_b;          ///< hinge: the unit axis u in each body's frame
-  Vec3d normal_a;                ///< hinge: a unit s_a perpendicular to u_a, in body a's frame
-  Quatd rest_rotation;           ///< fixed: q_a^-1 q_b at the start
+  Vec3d axis_a, axis_b;          ///< hinge, slider: the unit axis u in each body's frame; universal: u_a, u_b
+  Vec3d normal_a;                ///< hinge, slider: a unit s_a perpendicular to u_a, in body a's frame
+  Quatd rest_rotation;           ///< fixed, slider: q_a^-1 q_b at the start
   double compliance = 0.0;       ///< m/N and rad/(N m)
 };
 
@@ -138,8 +150,9 @@ class JointTreeSolver {
   /// Before the first iteration of a substep: every multiplier to 0 (the last ones kept for the
   /// geometric stiffness).
   void reset_multipliers();
-  /// The multipliers now (the checkpoint's state): each node's positional rows, then the angular
-  /// rows of each node that has them (a hinge's two padded with 0), and their restore.
+  /// The multipliers now (the checkpoint's state): each node's positional impulse (its positional
+  /// rows' multipliers; a slider's as a world vector), then the angular rows of each node that has
+  /// them (a hinge's two and a universal joint's one padded with 0), and their restore.
   std::vector<Vec3d> multipliers() const;
   void restore_multipliers(std::span<const Vec3d> lambdas);
   /// One iteration: the exact step above over every tree.
@@ -157,8 +170,10 @@ class JointTreeSolver {
     int link = -1;          ///< the parent joint (into links_); -1: a free root
     bool body_is_b = true;  ///< the body is the link's body_b
     int rows = 3;           ///< the parent joint's row count m
+    int positional = 3;     ///< how many of them are positional (the rest angular): 3, a slider's 2
     Rows lambda{};          ///< the parent joint's multiplier (N s^2 and N m s^2), within a substep
-    Vec3d previous_lambda;  ///< its positional rows at the end of the previous substep
+    Vec3d impulse;          ///< a slider's: the world impulse of its 2 positional rows now (N s^2)
+    Vec3d previous_lambda;  ///< its positional rows (a slider's: that impulse) at the end of the previous substep
     double lever_own = 0.0;     ///< w = |r| (tr I^-1 - n^T I^-1 n) of the body at its parent joint
     double lever_parent = 0.0;  ///< the same of the parent body at that joint (0: the ground)
     double swing_force = 0.0;   ///< 3 |g| times the mass of the node's subtree (N)
@@ -173,6 +188,7 @@ class JointTreeSolver {
     Rows s;
     Rows b, dlambda;  // b_e, and the step of lambda_e
     double alpha = 0.0;
+    Vec3d across[2];   // a slider's t_1, t_2 at the linearization
     Vec3d x0;          // the body before the step (the line search)
     Quatd q0;
     double load = 0.0;  // trace(I^-1 K_geo) of the body (start directions' test)
@@ -189,6 +205,9 @@ class JointTreeSolver {
   // Node i's step roots to leaves: dlambda and dx.
   template <int m>
   void substitute(std::size_t i);
+  // The world impulse of node n's positional rows: the first three multipliers, or a slider's
+  // lambda_1 t_1 + lambda_2 t_2 (kept in impulse).
+  static Vec3d positional_impulse(const Node& n);
   // The tree's part of the merit's penalty at step length beta (bodies moved there).
   double merit_penalty(std::size_t begin, std::size_t end, std::span<const RigidBody> bodies, double beta) const;
   // Moves the tree's bodies by the first of beta = 1, 1/2, ... that decreases the merit enough.
