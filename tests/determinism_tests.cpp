@@ -219,9 +219,7 @@ TEST(Golden, SoftBunnyAfter60Frames) {
   expect_golden({"soft_bunny.json", 60, 0x2278011bca836341ull, 0x2278011bca836341ull});
 }
 TEST(Golden, PendulumsAfter120Frames) {
-  expect_golden({"pendulums.json", 120, 0x61bf176a9a6da7f0ull,
-                 0x85431c22f8805df3ull,  // TODO unfused
-                 HashedState::Bodies});
+  expect_golden({"pendulums.json", 120, 0x61bf176a9a6da7f0ull, 0x61bf176a9a6da7f0ull, HashedState::Bodies});
 }
 TEST(Golden, RigidChainAfter120Frames) {
   expect_golden({"rigid_chain.json", 120, 0x8c183c0a86fa60bcull, 0x8c183c0a86fa60bcull, HashedState::Bodies});
@@ -229,9 +227,7 @@ TEST(Golden, RigidChainAfter120Frames) {
 // Contacts between bodies (issue 17): the stack of 10 boxes, fused by the native AVX-512 build,
 // unfused by the x86-64 build, the same bits (measured).
 TEST(Golden, StackAfter120Frames) {
-  expect_golden({"stack.json", 120, 0xecda93628f68415eull,
-                 0x853402b1ea59f006ull,  // TODO unfused
-                 HashedState::Bodies});
+  expect_golden({"stack.json", 120, 0xecda93628f68415eull, 0xecda93628f68415eull, HashedState::Bodies});
 }
 
 // The coupled scenes of issue 17: cloth against bodies (cloth_over_box), a hinge with limits and
@@ -239,27 +235,26 @@ TEST(Golden, StackAfter120Frames) {
 // boxes are in the water from frame 15), shapes and fluid (soft_in_water), and every material
 // (ragdoll_in_cloth). Fused by the native AVX-512 build, unfused by the x86-64 build (the
 // bodies-only hinge door gives the same bits in both; the others have fluid or cloth kernels).
-// boxes_in_water, soft_in_water and ragdoll_in_cloth were recomputed (fused, native AVX-512
-// build) after XSPH viscosity took in the bodies' and shapes' boundary (no-slip at their walls).
-// TODO unfused: their unfused values are still the old ones, to be recomputed by an x86-64 build.
+// boxes_in_water, soft_in_water and ragdoll_in_cloth were recomputed (both builds) after XSPH
+// viscosity took in the bodies' and shapes' boundary (no-slip at their walls); hinge_door and
+// ragdoll_in_cloth again after the hinges with limits went into the joint trees (and the
+// ragdoll's hammock grew to 1.6 x 1.5 m).
 TEST(Golden, ClothOverBoxAfter60Frames) {
   expect_golden({"cloth_over_box.json", 60, 0x1f714e6d6f580a34ull, 0x7168b67abcb21b2cull, HashedState::ParticlesAndBodies});
 }
 TEST(Golden, HingeDoorAfter120Frames) {
   // The hinges in the tree, their limit corrected through the anchor (issue 17, treehinge).
-  expect_golden({"hinge_door.json", 120, 0xba07208cd258604cull, 0x96d4b25569703b8aull,  // TODO unfused
-                 HashedState::Bodies});
+  expect_golden({"hinge_door.json", 120, 0xba07208cd258604cull, 0xba07208cd258604cull, HashedState::Bodies});
 }
 TEST(Golden, BoxesInWaterAfter20Frames) {
-  expect_golden({"boxes_in_water.json", 20, 0x6ba90bf6e63ca8ceull, 0x45797036883b9274ull, HashedState::ParticlesAndBodies});  // TODO unfused
+  expect_golden({"boxes_in_water.json", 20, 0x6ba90bf6e63ca8ceull, 0x2bd05fb1f710e561ull, HashedState::ParticlesAndBodies});
 }
 TEST(Golden, SoftInWaterAfter20Frames) {
-  expect_golden({"soft_in_water.json", 20, 0x142a27f1a1401a13ull, 0x805299a48c7e0848ull});  // TODO unfused
+  expect_golden({"soft_in_water.json", 20, 0x142a27f1a1401a13ull, 0x5b477eaed7a55e44ull});
 }
 TEST(Golden, RagdollInClothAfter30Frames) {
   // The hinges in the tree, and the hammock 1.5 m wide (issue 17, treehinge).
-  expect_golden({"ragdoll_in_cloth.json", 30, 0x14be1816b80c357full, 0x06c63b8af8614821ull,  // TODO unfused
-                 HashedState::ParticlesAndBodies});
+  expect_golden({"ragdoll_in_cloth.json", 30, 0xf6f1fa60f98f9426ull, 0x239fc78b0d28e359ull, HashedState::ParticlesAndBodies});
 }
 
 // The golden values' premise: a build whose instruction set has FMA fuses its multiply-adds (else
