@@ -31,6 +31,7 @@
 #include <iterator>
 #include <numbers>
 #include <sstream>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -1461,6 +1462,25 @@ std::vector<double> largest_motions(Simulation& sim, int frames) {
 
 double sphere_mass(double density, double radius) { return density * 4.0 / 3.0 * std::numbers::pi * radius * radius * radius; }
 
+// A stack stands: over `frames` frames no body moves more than `bound` (m), as the scene has it and
+// with body k shifted by (dx[k], 0, dz[k]) and turned by turn[k] degrees about the vertical.
+void expect_stack_stands(SceneDef scene, int frames, double bound, std::span<const float> dx, std::span<const float> dz,
+                         std::span<const float> turn) {
+  {
+    Simulation sim(scene);
+    const std::vector<double> moved = largest_motions(sim, frames);
+    for (std::size_t k = 0; k < moved.size(); ++k) EXPECT_LT(moved[k], bound) << scene.rigid_bodies[k].name;
+  }
+  for (std::size_t k = 0; k < dx.size(); ++k) {
+    RigidBodyDef& b = scene.rigid_bodies[k];
+    b.position[0] += dx[k], b.position[2] += dz[k];
+    b.axis = {0, 1, 0}, b.angle = turn[k];
+  }
+  Simulation sim(scene);
+  const std::vector<double> moved = largest_motions(sim, frames);
+  for (std::size_t k = 0; k < moved.size(); ++k) EXPECT_LT(moved[k], bound) << "shifted " << scene.rigid_bodies[k].name;
+}
+
 }  // namespace
 
 // The issue's stack: scenes/stack.json, 10 cubes of 0.2 m on the floor, stands for 10 s with no box
@@ -1471,22 +1491,10 @@ double sphere_mass(double density, double radius) { return density * 4.0 / 3.0 *
 TEST(BodyContacts, StackOfTenBoxesStandsForTenSeconds) {
   SceneDef scene = load_scene_file(std::string(SEICHE_SCENES_DIR) + "/stack.json");
   ASSERT_EQ(scene.rigid_bodies.size(), 10u);
-  {
-    Simulation sim(scene);
-    const std::vector<double> moved = largest_motions(sim, 600);
-    for (std::size_t k = 0; k < moved.size(); ++k) EXPECT_LT(moved[k], 0.002) << scene.rigid_bodies[k].name;
-  }
   const float dx[10] = {0, 0.01f, -0.005f, 0.008f, 0, -0.01f, 0.004f, 0.01f, -0.006f, 0.002f};
   const float dz[10] = {0, -0.004f, 0.006f, 0, 0.01f, -0.003f, 0.002f, -0.008f, 0.005f, 0};
   const float turn[10] = {0, 3, -2, 5, 1, -4, 2, 0, -3, 6};
-  for (std::size_t k = 0; k < 10; ++k) {
-    RigidBodyDef& b = scene.rigid_bodies[k];
-    b.position[0] += dx[k], b.position[2] += dz[k];
-    b.axis = {0, 1, 0}, b.angle = turn[k];
-  }
-  Simulation sim(scene);
-  const std::vector<double> moved = largest_motions(sim, 600);
-  for (std::size_t k = 0; k < moved.size(); ++k) EXPECT_LT(moved[k], 0.002) << "shifted " << scene.rigid_bodies[k].name;
+  expect_stack_stands(scene, 600, 0.002, dx, dz, turn);
 }
 
 // A wall does not make a body rest (shock propagation): a box thrown up at 3 m/s along a side wall
@@ -1579,21 +1587,8 @@ TEST(BodyContacts, StackOfThreeMeshBodiesStands) {
   }})", fmt::format(fmt::runtime(body), "bottom", cube, 0.1), fmt::format(fmt::runtime(body), "middle", cube, 0.3),
                                                      fmt::format(fmt::runtime(body), "top", cube, 0.5)),
                                          "mesh_stack.json");
-  {
-    Simulation sim(scene);
-    const std::vector<double> moved = largest_motions(sim, 300);
-    for (std::size_t k = 0; k < moved.size(); ++k) EXPECT_LT(moved[k], 0.002) << scene.rigid_bodies[k].name;
-  }
-  SceneDef shifted = scene;
   const float dx[3] = {0, 0.01f, -0.008f}, dz[3] = {0, -0.006f, 0.01f}, turn[3] = {0, 4, -5};
-  for (std::size_t k = 0; k < 3; ++k) {
-    RigidBodyDef& b = shifted.rigid_bodies[k];
-    b.position[0] += dx[k], b.position[2] += dz[k];
-    b.axis = {0, 1, 0}, b.angle = turn[k];
-  }
-  Simulation sim(shifted);
-  const std::vector<double> moved = largest_motions(sim, 300);
-  for (std::size_t k = 0; k < moved.size(); ++k) EXPECT_LT(moved[k], 0.002) << "shifted " << scene.rigid_bodies[k].name;
+  expect_stack_stands(scene, 300, 0.002, dx, dz, turn);
 }
 
 // Two spheres in free flight (no gravity) meet head on: radius 0.1 m at 1000 kg/m^3 and 2 m/s, radius
