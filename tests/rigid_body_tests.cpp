@@ -1342,6 +1342,33 @@ TEST(Contacts, BallRestsOnEveryColliderShape) {
   for (const BodyPose& b : p) EXPECT_LT(std::hypot(b.velocity[0], b.velocity[1], b.velocity[2]), 1e-6);
 }
 
+// A capsule (radius 5 cm, 0.6 m between cap centres) dropped lengthwise across a box collider
+// 0.2 m wide, its caps overhanging both sides: its cap balls touch nothing, its side (the segment
+// clipped to the box's top face, capsule_sides.hpp) holds it at both edges. It rests level on the
+// top (axis one radius above it, within 1 % of the radius, never lower). (With its cap balls
+// only it fell through.)
+TEST(Contacts, CapsuleAcrossANarrowBoxColliderRestsOnIt) {
+  Simulation sim(load_scene_text(R"({
+    "domain": {"min": [-1, 0, -1], "max": [1, 2, 1], "friction": 0.5},
+    "colliders": [{"box": {"min": [-0.1, 0, -0.1], "max": [0.1, 0.2, 0.1]}}],
+    "rigid_bodies": [
+      {"name": "capsule", "shape": "capsule", "radius": 0.05, "length": 0.6, "position": [0, 0.3, 0],
+       "axis": [0, 0, 1], "angle": 90}]
+  })",
+                                 "capsule_on_box_collider.json"));
+  const double radius = double(0.05f);
+  double lowest = INFINITY;
+  for (int f = 0; f < 60; ++f) {
+    sim.step_frame(FrameMeasure::Skip);
+    lowest = std::min(lowest, sim.body_poses()[0].position[1]);
+  }
+  const BodyPose p = sim.body_poses()[0];
+  EXPECT_GT(lowest, 0.2 + radius - 0.01 * radius);
+  EXPECT_NEAR(p.position[1], 0.2 + radius, 0.01 * radius);
+  EXPECT_NEAR(p.position[0], 0.0, 0.01 * radius) << "level, centred";
+  EXPECT_LT(std::hypot(p.velocity[0], p.velocity[1], p.velocity[2]), 1e-3);
+}
+
 // A box body touches at its corners, points of radius 0: dropped on the shipped cube mesh as a
 // collider (0.5 m, its top at 0.25 m), it rests on it, its centre 0.1 m above the top within 2 mm
 // (the field's voxel is 7.8 mm). (Its corners once never touched a mesh field: it fell through.)

@@ -53,6 +53,7 @@
 #include <utility>
 #include <vector>
 
+#include "box_box.hpp"
 #include "rigid_body.hpp"
 #include "seiche/scene.hpp"
 #include "world_surfaces.hpp"
@@ -106,6 +107,13 @@ class WorldContacts {
     Vec3d normal;
     double radius = 0.0;  // rho: its points' mean distance from the centre, weighted the same
   };
+  struct Touch {  // one point's normal in one pass: slot (point, surface), lever r, dlambda_n = d / w
+    int point = 0, surface = 0;
+    Vec3d r, normal;
+    double depth = 0.0, dlambda = 0.0;
+  };
+  /// The step s that fits the pass's depths best (touches_ from body b's pose; body_contacts.hpp).
+  double best_step(const RigidBody& b) const;
   /// A face: 3 points or more of `body` on `surface` (touching in this iteration, or in the
   /// substep), and their centre.
   bool face_patch(std::size_t body, int surface, bool this_iteration, Patch& out);
@@ -117,14 +125,22 @@ class WorldContacts {
   }
 
   WorldSurfaces surfaces_;
-  std::vector<ContactPoint> points_;      // every body's, body after body
+  struct BoxFrame {  // a box collider as a body: its centre, the world's axes, the box about it
+    RigidBody frame;
+    SolidSurface solid;
+  };
+  std::vector<ContactPoint> points_;      // every body's, body after body (a capsule's side roles last)
   std::vector<int> first_point_;          // per body, into points_; one more entry at the end
   std::vector<Material> materials_;       // per body
   std::vector<double> extent_;            // per body: its farthest point from the centre (m)
+  std::vector<int> first_side_point_;     // per body: its side roles' first point (a capsule), else -1
+  std::vector<SolidSurface> capsule_solid_;  // per body: its solid in its frame (a capsule's only)
+  std::vector<BoxFrame> box_frames_;      // per surface: a box collider's (others unused)
   std::vector<char> near_;                // per surface: the body now within reach of it
   std::vector<Vec3d> v_before_, omega_before_;  // per body, at the start of the substep
   std::vector<Slot> slots_;
   std::vector<Pair> pairs_;
+  std::vector<Touch> touches_;  // scratch: one pass's normals of one body
   std::vector<std::pair<Vec3d, Vec3d>> friction_;  // scratch: (lever, impulse) of one surface's points
   double h_ = 0.0;
   double rest_speed_ = 0.0;  // 2 |g| h
