@@ -113,6 +113,7 @@ class BodyContacts {
  private:
   struct Body {
     int first_point = 0, end_point = 0;  // into points_
+    int first_axis_point = 0;            // a capsule's axis balls (against a mesh only) up to end_point
     SolidSurface solid;                  // body frame (body_solid.hpp)
     double extent = 0.0;
     double static_friction = 0.0, dynamic_friction = 0.0, restitution = 0.0;

@@ -60,6 +60,15 @@ std::vector<ContactPoint> contact_points(const RigidBodyDef& def) {
   return corners;
 }
 
+std::vector<ContactPoint> capsule_axis_points(const RigidBodyDef& def) {
+  const ShapeDims d = body_shape_def(def);
+  if (d.shape != BodyShape::Capsule || !(d.radius > 0.0)) return {};
+  const int steps = int(std::ceil(d.length / d.radius));
+  std::vector<ContactPoint> balls;
+  for (int i = 1; i < steps; ++i) balls.push_back({{0.0, d.length * (double(i) / steps - 0.5), 0.0}, d.radius});
+  return balls;
+}
+
 WorldContacts::WorldContacts(const SceneDef& scene, double substep,
                              std::span<const std::shared_ptr<const MeshSdf>> mesh_fields)
     : surfaces_(scene, mesh_fields), h_(substep) {
@@ -68,7 +77,10 @@ WorldContacts::WorldContacts(const SceneDef& scene, double substep,
   for (const RigidBodyDef& def : scene.rigid_bodies) {
     first_point_.push_back(int(points_.size()));
     for (const ContactPoint& p : contact_points(def)) points_.push_back(p);
-    // A capsule's side against the box colliders: one point per role (capsule_sides.hpp), no ball.
+    // A capsule's side: its axis balls against the mesh colliders, one point per role
+    // (capsule_sides.hpp, no ball) against the box colliders.
+    first_axis_point_.push_back(int(points_.size()));
+    for (const ContactPoint& p : capsule_axis_points(def)) points_.push_back(p);
     const ShapeDims dims = body_shape_def(def);
     const bool capsule = dims.shape == BodyShape::Capsule;
     first_side_point_.push_back(capsule ? int(points_.size()) : -1);
@@ -136,15 +148,17 @@ void WorldContacts::solve_positions(std::vector<RigidBody>& bodies) {
       const int balls_end = first_side >= 0 ? first_side : first_point_[k + 1];
       for (int point = first_point_[k]; point < balls_end; ++point) {
         const ContactPoint& c = points_[std::size_t(point)];
+        const bool on_axis = point >= first_axis_point_[k];  // a capsule's axis ball: meshes only
         for (int s = 0; s < surfaces; ++s) {
           SurfacePenetration pen;
-          if (!near_[std::size_t(s)] || !surfaces_.penetration(s, before.world_point(c.centre), c.radius, pen))
+          if (!near_[std::size_t(s)] || (on_axis && surfaces_.solid(s).shape != ColliderDef::Shape::Mesh) ||
+              !surfaces_.penetration(s, before.world_point(c.centre), c.radius, pen))
             continue;
           touch(point, s, c.centre - c.radius * rotate_back(before.q, pen.normal), pen.normal, pen.depth);
         }
       }
-      // A capsule's side against the box colliders (capsule_sides.hpp; against the domain's walls
-      // and the other shapes a segment's deepest point is an end: its cap ball).
+      // A capsule's side against the box colliders (capsule_sides.hpp; against a mesh its axis
+      // balls above; against the domain's walls and a plane its cap balls are the deepest points).
       for (int s = 0; first_side >= 0 && s < surfaces; ++s) {
         if (!near_[std::size_t(s)] || surfaces_.solid(s).shape != ColliderDef::Shape::Box) continue;
         const BoxFrame& box = box_frames_[std::size_t(s)];

@@ -68,6 +68,10 @@ struct ContactPoint {
 
 /// The contact points of `def`'s shape (above).
 std::vector<ContactPoint> contact_points(const RigidBodyDef& def);
+/// A capsule's balls inside its segment, for its side against a mesh (above): n - 1 balls of its
+/// radius rho at equal steps between the cap centres, n = ceil(length / rho); none for the other
+/// shapes (or a capsule no longer than its radius).
+std::vector<ContactPoint> capsule_axis_points(const RigidBodyDef& def);
 
 class WorldContacts {
  public:
@@ -133,6 +137,8 @@ class WorldContacts {
   std::vector<int> first_point_;          // per body, into points_; one more entry at the end
   std::vector<Material> materials_;       // per body
   std::vector<double> extent_;            // per body: its farthest point from the centre (m)
+  std::vector<int> first_axis_point_;     // per body: its axis balls' first point (a capsule's; else
+                                          // its side roles' or the end: none)
   std::vector<int> first_side_point_;     // per body: its side roles' first point (a capsule), else -1
   std::vector<SolidSurface> capsule_solid_;  // per body: its solid in its frame (a capsule's only)
   std::vector<BoxFrame> box_frames_;      // per surface: a box collider's (others unused)
