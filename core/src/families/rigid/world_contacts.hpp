@@ -4,17 +4,29 @@
 // Contact points, in the body frame, each the centre of a ball of radius rho: a box's 8
 // corners (rho = 0), a sphere's centre (rho = its radius), a capsule's two cap centres (rho = its
 // radius), a mesh body's vertices (rho = 0: a mesh touches at its vertices only, so a long edge
-// or a large face may sink into a sphere or a convex collider between them; and a capsule touches
-// at its cap balls only, so one lying across a box collider narrower than itself falls through:
-// the side contacts of capsule_sides.hpp are between bodies only). Every iteration, body by body
-// in scene order (serial: the same bits at any thread
-// count), with a point's centre c = x + R r_c against each surface its bounding ball (its
-// extent, grown by half) reaches:
+// or a large face may sink into a sphere or a convex collider between them). A capsule's side,
+// which its cap balls miss (one lying across a collider narrower than itself fell through):
+//   - against a box collider, capsule_sides.hpp's points of the segment (its crossing of the
+//     box's edge, the segment clipped to the face's sides), the box seen as a body at its centre
+//     with the world's axes, each a ball of the capsule's radius, one point slot per role;
+//   - against a mesh collider, its axis balls: n - 1 balls of its radius at equal steps between
+//     the cap centres, n = ceil(length / rho) (steps of at most rho: at a sharp ridge between two
+//     balls the capsule sinks by up to (1 - sqrt(3)/2) rho = 0.13 rho), tested against meshes
+//     only (and by the body contacts against mesh bodies only);
+//   - against a sphere or a capsule collider, nothing (a known limit: it rests on its cap balls).
+// Every iteration, body by body in scene order (serial: the same bits at any thread count),
+// with a point's centre c = x + R r_c against each surface its bounding ball (its extent, grown
+// by half) reaches:
 //   normals: depth d of the ball in the surface, outward normal n (a contact where d > 0); the
 //     body's contact point P = c - rho n, lever r = P - x, w = 1/m + (r x n)^T I^-1 (r x n);
 //     dlambda_n = d / w (zero compliance), the impulse dlambda_n n at r (body_correction.hpp).
 //     All of a body's points from the same pose, applied together (Jacobi), and again until no
-//     point is deeper than 1e-12 m (at most 32 passes). One point after the other (the paper's
+//     point is deeper than 1e-12 m (at most 32 passes). A pass in which a capsule's side point
+//     (box collider) touches scales its impulses by the step s that fits the depths best, as the
+//     body contacts do (body_contacts.hpp): with dd_j the change of point j's depth under all the
+//     impulses together, s = sum d_j dd_j / sum dd_j^2, at most 1 (two side points near the
+//     centre of a capsule pushed it 1.55 times as far as needed, and it bounced every substep);
+//     the other passes keep s = 1. One point after the other (the paper's
 //     Gauss-Seidel) turns the body at each corner, which the next corner undoes: a resting box
 //     then slides on its corners' tangential motion, and its normal multipliers overshoot; a
 //     face's corners pushed together move it straight out.
