@@ -1343,6 +1343,63 @@ TEST(Contacts, BallRestsOnEveryColliderShape) {
   for (const BodyPose& b : p) EXPECT_LT(std::hypot(b.velocity[0], b.velocity[1], b.velocity[2]), 1e-6);
 }
 
+// A capsule (radius 5 cm, 0.6 m between cap centres) dropped lengthwise across a box collider
+// 0.2 m wide, its caps overhanging both sides: its cap balls touch nothing, its side (the segment
+// clipped to the box's top face, capsule_sides.hpp) holds it at both edges. It rests level on the
+// top (axis one radius above it, within 1 % of the radius, never lower). (With its cap balls
+// only it fell through.)
+TEST(Contacts, CapsuleAcrossANarrowBoxColliderRestsOnIt) {
+  Simulation sim(load_scene_text(R"({
+    "domain": {"min": [-1, 0, -1], "max": [1, 2, 1], "friction": 0.5},
+    "colliders": [{"box": {"min": [-0.1, 0, -0.1], "max": [0.1, 0.2, 0.1]}}],
+    "rigid_bodies": [
+      {"name": "capsule", "shape": "capsule", "radius": 0.05, "length": 0.6, "position": [0, 0.3, 0],
+       "axis": [0, 0, 1], "angle": 90}]
+  })",
+                                 "capsule_on_box_collider.json"));
+  const double radius = double(0.05f);
+  double lowest = INFINITY;
+  for (int f = 0; f < 60; ++f) {
+    sim.step_frame(FrameMeasure::Skip);
+    lowest = std::min(lowest, sim.body_poses()[0].position[1]);
+  }
+  const BodyPose p = sim.body_poses()[0];
+  EXPECT_GT(lowest, 0.2 + radius - 0.01 * radius);
+  EXPECT_NEAR(p.position[1], 0.2 + radius, 0.01 * radius);
+  EXPECT_NEAR(p.position[0], 0.0, 0.01 * radius) << "level, centred";
+  EXPECT_LT(std::hypot(p.velocity[0], p.velocity[1], p.velocity[2]), 1e-3);
+}
+
+// A capsule's side against a mesh: its balls inside the segment (world_contacts.hpp). The capsule
+// of the test above dropped across the shipped cube scaled to 0.2 m, once as a mesh collider and
+// once as a fixed mesh body (each in its own scene), rests on the cube's top (y = 0.2): its axis
+// one radius above it, within 2 mm (the field's voxel is 3.1 mm, 1/64 of the cube), and stays.
+// (With its cap balls only it fell through both.)
+TEST(Contacts, CapsuleAcrossANarrowMeshRestsOnIt) {
+  const std::string cube = std::string(SEICHE_SCENES_DIR) + "/meshes/cube.obj";
+  const std::string capsule = R"({"name": "capsule", "shape": "capsule", "radius": 0.05, "length": 0.6,
+                                  "position": [0, 0.3, 0], "axis": [0, 0, 1], "angle": 90})";
+  const std::string domain = R"("domain": {"min": [-1, 0, -1], "max": [1, 2, 1], "friction": 0.5})";
+  const SceneDef as_collider = load_scene_text(
+      "{" + domain + R"(, "colliders": [{"mesh": {"file": ")" + cube + R"(", "scale": 0.2, "translate": [0, 0.1, 0]}}],
+      "rigid_bodies": [)" + capsule + "]}",
+      "capsule_on_mesh_collider.json");
+  const SceneDef as_body = load_scene_text(
+      "{" + domain + R"(, "rigid_bodies": [{"name": "cube", "shape": "mesh", "mesh": {"file": ")" + cube +
+          R"(", "scale": 0.2}, "position": [0, 0.1, 0], "fixed": true}, )" + capsule + "]}",
+      "capsule_on_mesh_body.json");
+  const double radius = double(0.05f);
+  for (const SceneDef* scene : {&as_collider, &as_body}) {
+    Simulation sim(*scene);
+    const std::size_t k = scene->rigid_bodies.size() - 1;
+    for (int f = 0; f < 60; ++f) sim.step_frame(FrameMeasure::Skip);
+    const BodyPose p = sim.body_poses()[k];
+    EXPECT_NEAR(p.position[1], 0.2 + radius, 2e-3) << scene->rigid_bodies.size();
+    EXPECT_NEAR(p.position[0], 0.0, 2e-3) << "level, centred";
+    EXPECT_LT(std::hypot(p.velocity[0], p.velocity[1], p.velocity[2]), 1e-3);
+  }
+}
+
 // A box body touches at its corners, points of radius 0: dropped on the shipped cube mesh as a
 // collider (0.5 m, its top at 0.25 m), it rests on it, its centre 0.1 m above the top within 2 mm
 // (the field's voxel is 7.8 mm). (Its corners once never touched a mesh field: it fell through.)

@@ -76,6 +76,8 @@ BodyContacts::BodyContacts(const SceneDef& scene, const std::vector<std::pair<in
     for (const ContactPoint& p : contact_points(def)) points_.push_back(p);
     const ShapeDims dims = body_shape_def(def);
     if (dims.shape == BodyShape::Mesh) append_face_points(body_surface(def), mass_properties(dims).extent, points_);
+    b.first_axis_point = int(points_.size());
+    for (const ContactPoint& p : capsule_axis_points(def)) points_.push_back(p);
     b.end_point = int(points_.size());
     if (dims.shape == BodyShape::Mesh) mesh_sdfs_.push_back(mesh_fields.get(k));
     b.solid = body_solid(dims, dims.shape == BodyShape::Mesh ? mesh_sdfs_.back().get() : nullptr);
@@ -117,12 +119,17 @@ void BodyContacts::find_pairs(const std::vector<RigidBody>& bodies) {
   });
   for (Active& pair : active_) {
     pair.first_slot = int(slots_.size());
-    for (const auto& [body, of_a] : {std::pair{pair.a, true}, std::pair{pair.b, false}})
-      for (int point = bodies_[std::size_t(body)].first_point; point < bodies_[std::size_t(body)].end_point; ++point) {
+    for (const auto& [body, of_a] : {std::pair{pair.a, true}, std::pair{pair.b, false}}) {
+      const Body& own = bodies_[std::size_t(body)];
+      // A capsule's axis balls against a mesh body only (world_contacts.hpp).
+      const bool other_is_mesh = bodies_[std::size_t(of_a ? pair.b : pair.a)].solid.shape == ColliderDef::Shape::Mesh;
+      const int end = other_is_mesh ? own.end_point : own.first_axis_point;
+      for (int point = own.first_point; point < end; ++point) {
         Slot s;
         s.point = point, s.of_a = of_a;
         slots_.push_back(s);
       }
+    }
     // A capsule's side against a capsule or a box: one slot per role (capsule_sides.hpp).
     pair.first_side_slot = int(slots_.size());
     if (has_capsule_sides(bodies_[std::size_t(pair.a)].solid, bodies_[std::size_t(pair.b)].solid))

@@ -6,7 +6,8 @@
 // Narrow phase: two boxes by separating axes and clipping, face against face or edge against
 // edge (box_box.hpp), each point in the pair's slot of its features (below). Any other pair:
 // each body's contact points (world_contacts.hpp: a sphere's centre with its radius, a capsule's
-// cap centres with its radius, box corners, a mesh's vertices; and here a mesh's large triangles,
+// cap centres with its radius, box corners, a mesh's vertices, a capsule's axis balls against a
+// mesh body only; and here a mesh's large triangles,
 // area above (extent / 8)^2, each corner moved a third of the way to the centroid, radius 0:
 // equal mesh cubes stacked meet vertex on vertex, where a vertex lies on the lower body's side
 // as much as under its top, so the nearest face is the side and the depth 0, and they fell
@@ -16,7 +17,8 @@
 // ways per pair; and a capsule's side against a capsule or a box (capsule_sides.hpp: the
 // segments' crossing, the segment across a box's face or edge), one slot per role. A ball
 // against a solid is exact: sphere-sphere, sphere-capsule, and capsule-capsule end on or side by
-// side. Known limits: a capsule's side against a mesh body (only its cap balls touch it); a mesh
+// side. Known limits: a capsule's side on a mesh body rests on its axis balls (steps of at most
+// its radius: at a sharp ridge between two of them it sinks by up to 13 % of its radius); a mesh
 // touches at its vertices, the normal from the other body's nearest face point by point.
 // Slots: a point's normal multiplier is summed in its slot over the substep's passes and
 // iterations, and read by friction and restitution at that point, so a slot keeps one point: a
@@ -113,6 +115,7 @@ class BodyContacts {
  private:
   struct Body {
     int first_point = 0, end_point = 0;  // into points_
+    int first_axis_point = 0;            // a capsule's axis balls (against a mesh only) up to end_point
     SolidSurface solid;                  // body frame (body_solid.hpp)
     double extent = 0.0;
     double static_friction = 0.0, dynamic_friction = 0.0, restitution = 0.0;

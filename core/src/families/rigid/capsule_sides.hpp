@@ -1,7 +1,8 @@
 // The contacts of a capsule's side (its segment between the cap centres) with another capsule or
-// a box, which the capsule's contact balls at its cap centres (world_contacts.hpp) miss: two
-// capsules crossed side on side, or a capsule lying across a box's edge or over a face narrower
-// than the capsule, have no cap centre near the other body. Where a segment end is the closest
+// a box (between bodies, and against a box collider seen as a body: world_contacts.hpp), which the
+// capsule's contact balls at its cap centres miss: two capsules crossed side on side, or a capsule
+// lying across a box's edge or over a face narrower than the capsule, have no cap centre near the
+// other body. Where a segment end is the closest
 // point, its cap ball is the contact already (a ball against a solid is exact): these add only
 // points inside the segment.
 //   Capsule against capsule: the closest points c_a = P_a + s d_a, c_b = P_b + t d_b of the two

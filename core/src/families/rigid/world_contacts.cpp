@@ -6,8 +6,10 @@
 #include <cmath>
 
 #include "body_correction.hpp"
+#include "body_solid.hpp"
 #include "body_shape.hpp"
 #include "body_surface.hpp"
+#include "capsule_sides.hpp"
 
 namespace seiche::rigid {
 
@@ -58,6 +60,15 @@ std::vector<ContactPoint> contact_points(const RigidBodyDef& def) {
   return corners;
 }
 
+std::vector<ContactPoint> capsule_axis_points(const RigidBodyDef& def) {
+  const ShapeDims d = body_shape_def(def);
+  if (d.shape != BodyShape::Capsule || !(d.radius > 0.0)) return {};
+  const int steps = int(std::ceil(d.length / d.radius));
+  std::vector<ContactPoint> balls;
+  for (int i = 1; i < steps; ++i) balls.push_back({{0.0, d.length * (double(i) / steps - 0.5), 0.0}, d.radius});
+  return balls;
+}
+
 WorldContacts::WorldContacts(const SceneDef& scene, double substep,
                              std::span<const std::shared_ptr<const MeshSdf>> mesh_fields)
     : surfaces_(scene, mesh_fields), h_(substep) {
@@ -66,10 +77,29 @@ WorldContacts::WorldContacts(const SceneDef& scene, double substep,
   for (const RigidBodyDef& def : scene.rigid_bodies) {
     first_point_.push_back(int(points_.size()));
     for (const ContactPoint& p : contact_points(def)) points_.push_back(p);
+    // A capsule's side: its axis balls against the mesh colliders, one point per role
+    // (capsule_sides.hpp, no ball) against the box colliders.
+    first_axis_point_.push_back(int(points_.size()));
+    for (const ContactPoint& p : capsule_axis_points(def)) points_.push_back(p);
+    const ShapeDims dims = body_shape_def(def);
+    const bool capsule = dims.shape == BodyShape::Capsule;
+    first_side_point_.push_back(capsule ? int(points_.size()) : -1);
+    capsule_solid_.push_back(capsule ? body_solid(dims, nullptr) : SolidSurface{});
+    if (capsule) points_.resize(points_.size() + kCapsuleSideRoles);
     materials_.push_back({def.friction, def.dynamic_friction, def.restitution});
-    extent_.push_back(mass_properties(body_shape_def(def)).extent);
+    extent_.push_back(mass_properties(dims).extent);
   }
   first_point_.push_back(int(points_.size()));
+  for (int s = 0; s < surfaces_.count(); ++s) {
+    const SolidSurface& world = surfaces_.solid(s);
+    BoxFrame box;
+    if (world.shape == ColliderDef::Shape::Box) {
+      box.frame.x = 0.5 * (world.a + world.b);
+      box.solid = world;
+      box.solid.a = world.a - box.frame.x, box.solid.b = world.b - box.frame.x;
+    }
+    box_frames_.push_back(box);
+  }
   slots_.resize(points_.size() * std::size_t(surfaces_.count()));
   pairs_.resize(scene.rigid_bodies.size() * std::size_t(surfaces_.count()));
   v_before_.resize(scene.rigid_bodies.size());
@@ -103,26 +133,53 @@ void WorldContacts::solve_positions(std::vector<RigidBody>& bodies) {
     for (int pass = 0; pass < kNormalPasses; ++pass) {
       const RigidBody before = b;
       double deepest = 0.0;
-      for (int point = first_point_[k]; point < first_point_[k + 1]; ++point) {
+      // Each touching point: its slot (point, s), body point `local` (body frame), depth, normal n.
+      touches_.clear();
+      bool sides = false;
+      const auto touch = [&](int point, int s, Vec3d local, Vec3d n, double depth) {
+        const Vec3d r = rotate(before.q, local);
+        const double w = positional_inverse_mass(before, r, n);
+        Slot& contact = slot(point, s);
+        contact.normal = n;
+        contact.local = local;
+        if (w > 0.0) touches_.push_back({point, s, r, n, depth, depth / w});
+      };
+      const int first_side = first_side_point_[k];
+      const int balls_end = first_side >= 0 ? first_side : first_point_[k + 1];
+      for (int point = first_point_[k]; point < balls_end; ++point) {
         const ContactPoint& c = points_[std::size_t(point)];
+        const bool on_axis = point >= first_axis_point_[k];  // a capsule's axis ball: meshes only
         for (int s = 0; s < surfaces; ++s) {
           SurfacePenetration pen;
-          if (!near_[std::size_t(s)] || !surfaces_.penetration(s, before.world_point(c.centre), c.radius, pen))
+          if (!near_[std::size_t(s)] || (on_axis && surfaces_.solid(s).shape != ColliderDef::Shape::Mesh) ||
+              !surfaces_.penetration(s, before.world_point(c.centre), c.radius, pen))
             continue;
-          Slot& contact = slot(point, s);
-          const Vec3d n = pen.normal;
-          contact.normal = n;
-          contact.local = c.centre - c.radius * rotate_back(before.q, n);
-          const Vec3d r = rotate(before.q, contact.local);
-          const double w = positional_inverse_mass(before, r, n);
-          if (!(w > 0.0)) continue;
-          const double dlambda_n = pen.depth / w;
-          contact.lambda_n += dlambda_n;
-          contact.touching = true;
-          body_surface(k, s).lambda_n += dlambda_n;
-          apply_positional_impulse(b, r, dlambda_n * n);
-          deepest = std::max(deepest, pen.depth);
+          touch(point, s, c.centre - c.radius * rotate_back(before.q, pen.normal), pen.normal, pen.depth);
         }
+      }
+      // A capsule's side against the box colliders (capsule_sides.hpp; against a mesh its axis
+      // balls above; against the domain's walls and a plane its cap balls are the deepest points).
+      for (int s = 0; first_side >= 0 && s < surfaces; ++s) {
+        if (!near_[std::size_t(s)] || surfaces_.solid(s).shape != ColliderDef::Shape::Box) continue;
+        const BoxFrame& box = box_frames_[std::size_t(s)];
+        BoxBoxContact found[kCapsuleSideRoles];
+        capsule_side_contacts(before, capsule_solid_[k], box.frame, box.solid, found);
+        for (int role = 0; role < kCapsuleSideRoles; ++role) {
+          if (!(found[role].depth > 0.0)) continue;
+          sides = true;
+          touch(first_side + role, s, rotate_back(before.q, found[role].point_a - before.x), found[role].normal,
+                found[role].depth);
+        }
+      }
+      const double step = sides ? best_step(before) : 1.0;
+      for (const Touch& t : touches_) {
+        const double dlambda_n = step * t.dlambda;
+        Slot& contact = slot(t.point, t.surface);
+        contact.lambda_n += dlambda_n;
+        contact.touching = true;
+        body_surface(k, t.surface).lambda_n += dlambda_n;
+        apply_positional_impulse(b, t.r, dlambda_n * t.normal);
+        deepest = std::max(deepest, t.depth);
       }
       if (!(deepest > kResolved)) break;
     }
@@ -247,6 +304,20 @@ void WorldContacts::solve_velocities(std::vector<RigidBody>& bodies) {
       }
     }
   }
+}
+
+double WorldContacts::best_step(const RigidBody& b) const {
+  // The body's move under all the impulses together: dx = sum p / m, dtheta = I^-1 sum r x p.
+  Vec3d impulse{}, moment{};
+  for (const Touch& t : touches_) impulse += t.dlambda * t.normal, moment += cross(t.r, t.dlambda * t.normal);
+  const Vec3d dx = b.inverse_mass * impulse, dtheta = b.world_inverse_inertia(moment);
+  // Each point's depth change dd_j = n_j.(dx + dtheta x r_j); s = sum d_j dd_j / sum dd_j^2.
+  double fit = 0.0, size = 0.0;
+  for (const Touch& t : touches_) {
+    const double change = dot(t.normal, dx + cross(dtheta, t.r));
+    fit += t.depth * change, size += change * change;
+  }
+  return size > 0.0 ? std::clamp(fit / size, 0.0, 1.0) : 1.0;
 }
 
 void WorldContacts::held_up(std::vector<char>& out, Vec3d up, double min_cosine) const {

@@ -4,17 +4,29 @@
 // Contact points, in the body frame, each the centre of a ball of radius rho: a box's 8
 // corners (rho = 0), a sphere's centre (rho = its radius), a capsule's two cap centres (rho = its
 // radius), a mesh body's vertices (rho = 0: a mesh touches at its vertices only, so a long edge
-// or a large face may sink into a sphere or a convex collider between them; and a capsule touches
-// at its cap balls only, so one lying across a box collider narrower than itself falls through:
-// the side contacts of capsule_sides.hpp are between bodies only). Every iteration, body by body
-// in scene order (serial: the same bits at any thread
-// count), with a point's centre c = x + R r_c against each surface its bounding ball (its
-// extent, grown by half) reaches:
+// or a large face may sink into a sphere or a convex collider between them). A capsule's side,
+// which its cap balls miss (one lying across a collider narrower than itself fell through):
+//   - against a box collider, capsule_sides.hpp's points of the segment (its crossing of the
+//     box's edge, the segment clipped to the face's sides), the box seen as a body at its centre
+//     with the world's axes, each a ball of the capsule's radius, one point slot per role;
+//   - against a mesh collider, its axis balls: n - 1 balls of its radius at equal steps between
+//     the cap centres, n = ceil(length / rho) (steps of at most rho: at a sharp ridge between two
+//     balls the capsule sinks by up to (1 - sqrt(3)/2) rho = 0.13 rho), tested against meshes
+//     only (and by the body contacts against mesh bodies only);
+//   - against a sphere or a capsule collider, nothing (a known limit: it rests on its cap balls).
+// Every iteration, body by body in scene order (serial: the same bits at any thread count),
+// with a point's centre c = x + R r_c against each surface its bounding ball (its extent, grown
+// by half) reaches:
 //   normals: depth d of the ball in the surface, outward normal n (a contact where d > 0); the
 //     body's contact point P = c - rho n, lever r = P - x, w = 1/m + (r x n)^T I^-1 (r x n);
 //     dlambda_n = d / w (zero compliance), the impulse dlambda_n n at r (body_correction.hpp).
 //     All of a body's points from the same pose, applied together (Jacobi), and again until no
-//     point is deeper than 1e-12 m (at most 32 passes). One point after the other (the paper's
+//     point is deeper than 1e-12 m (at most 32 passes). A pass in which a capsule's side point
+//     (box collider) touches scales its impulses by the step s that fits the depths best, as the
+//     body contacts do (body_contacts.hpp): with dd_j the change of point j's depth under all the
+//     impulses together, s = sum d_j dd_j / sum dd_j^2, at most 1 (two side points near the
+//     centre of a capsule pushed it 1.55 times as far as needed, and it bounced every substep);
+//     the other passes keep s = 1. One point after the other (the paper's
 //     Gauss-Seidel) turns the body at each corner, which the next corner undoes: a resting box
 //     then slides on its corners' tangential motion, and its normal multipliers overshoot; a
 //     face's corners pushed together move it straight out.
@@ -53,6 +65,7 @@
 #include <utility>
 #include <vector>
 
+#include "box_box.hpp"
 #include "rigid_body.hpp"
 #include "seiche/scene.hpp"
 #include "world_surfaces.hpp"
@@ -67,6 +80,10 @@ struct ContactPoint {
 
 /// The contact points of `def`'s shape (above).
 std::vector<ContactPoint> contact_points(const RigidBodyDef& def);
+/// A capsule's balls inside its segment, for its side against a mesh (above): n - 1 balls of its
+/// radius rho at equal steps between the cap centres, n = ceil(length / rho); none for the other
+/// shapes (or a capsule no longer than its radius).
+std::vector<ContactPoint> capsule_axis_points(const RigidBodyDef& def);
 
 class WorldContacts {
  public:
@@ -106,6 +123,13 @@ class WorldContacts {
     Vec3d normal;
     double radius = 0.0;  // rho: its points' mean distance from the centre, weighted the same
   };
+  struct Touch {  // one point's normal in one pass: slot (point, surface), lever r, dlambda_n = d / w
+    int point = 0, surface = 0;
+    Vec3d r, normal;
+    double depth = 0.0, dlambda = 0.0;
+  };
+  /// The step s that fits the pass's depths best (touches_ from body b's pose; body_contacts.hpp).
+  double best_step(const RigidBody& b) const;
   /// A face: 3 points or more of `body` on `surface` (touching in this iteration, or in the
   /// substep), and their centre.
   bool face_patch(std::size_t body, int surface, bool this_iteration, Patch& out);
@@ -117,14 +141,24 @@ class WorldContacts {
   }
 
   WorldSurfaces surfaces_;
-  std::vector<ContactPoint> points_;      // every body's, body after body
+  struct BoxFrame {  // a box collider as a body: its centre, the world's axes, the box about it
+    RigidBody frame;
+    SolidSurface solid;
+  };
+  std::vector<ContactPoint> points_;      // every body's, body after body (a capsule's side roles last)
   std::vector<int> first_point_;          // per body, into points_; one more entry at the end
   std::vector<Material> materials_;       // per body
   std::vector<double> extent_;            // per body: its farthest point from the centre (m)
+  std::vector<int> first_axis_point_;     // per body: its axis balls' first point (a capsule's; else
+                                          // its side roles' or the end: none)
+  std::vector<int> first_side_point_;     // per body: its side roles' first point (a capsule), else -1
+  std::vector<SolidSurface> capsule_solid_;  // per body: its solid in its frame (a capsule's only)
+  std::vector<BoxFrame> box_frames_;      // per surface: a box collider's (others unused)
   std::vector<char> near_;                // per surface: the body now within reach of it
   std::vector<Vec3d> v_before_, omega_before_;  // per body, at the start of the substep
   std::vector<Slot> slots_;
   std::vector<Pair> pairs_;
+  std::vector<Touch> touches_;  // scratch: one pass's normals of one body
   std::vector<std::pair<Vec3d, Vec3d>> friction_;  // scratch: (lever, impulse) of one surface's points
   double h_ = 0.0;
   double rest_speed_ = 0.0;  // 2 |g| h

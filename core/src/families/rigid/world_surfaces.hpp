@@ -55,6 +55,8 @@ class WorldSurfaces {
 
   int count() const { return int(surfaces_.size()); }
   double friction(int surface) const { return surfaces_[std::size_t(surface)].friction; }
+  /// The surface itself (world frame; the domain's walls are planes).
+  const SolidSurface& solid(int surface) const { return surfaces_[std::size_t(surface)]; }
   /// How deep the ball (p, r) reaches into `surface`; false where it does not (depth <= 0).
   bool penetration(int surface, Vec3d p, double r, SurfacePenetration& out) const {
     return rigid::penetration(surfaces_[std::size_t(surface)], p, r, out);
