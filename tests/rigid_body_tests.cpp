@@ -1370,6 +1370,50 @@ TEST(Contacts, CapsuleAcrossANarrowBoxColliderRestsOnIt) {
   EXPECT_LT(std::hypot(p.velocity[0], p.velocity[1], p.velocity[2]), 1e-3);
 }
 
+// A capsule's side against a sphere and a capsule collider (capsule_sides.hpp, world_contacts.hpp):
+// the capsule of the test above (radius 5 cm, 0.6 m between cap centres) dropped across a sphere
+// of radius 0.1 m and, in its own scene, across a horizontal capsule collider of radius 0.1 m and
+// 0.2 m between its ends, at right angles to it, both with their tops at y = 0.2: its caps
+// overhang, only its side touches. It rests on the top (axis one radius above it, within 1 % of
+// the radius, never lower), level and centred. (With its cap balls only it fell through both: its
+// axis at 0.050 m after 60 frames, on the floor.) Lying along that capsule collider turned
+// parallel to it (its ends' roles), with friction 0.5 (frictionless, the least tilt slides it
+// along: 3 cm in 2 s), it rests on both ends of the collider the same way.
+TEST(Contacts, CapsuleAcrossASphereAndACapsuleColliderRestsOnThem) {
+  const std::string capsule = R"({"name": "capsule", "shape": "capsule", "radius": 0.05, "length": 0.6,
+                                  "position": [0, 0.3, 0], "axis": [0, 0, 1], "angle": 90})";
+  const std::string domain = R"("domain": {"min": [-1, 0, -1], "max": [1, 2, 1], "friction": 0.5})";
+  const SceneDef on_sphere = load_scene_text(
+      "{" + domain + R"(, "colliders": [{"sphere": {"center": [0, 0.1, 0], "radius": 0.1}}],
+      "rigid_bodies": [)" + capsule + "]}",
+      "capsule_on_sphere_collider.json");
+  const SceneDef on_capsule = load_scene_text(
+      "{" + domain + R"(, "colliders": [{"capsule": {"a": [0, 0.1, -0.1], "b": [0, 0.1, 0.1], "radius": 0.1}}],
+      "rigid_bodies": [)" + capsule + "]}",
+      "capsule_on_capsule_collider.json");
+  const SceneDef along_capsule = load_scene_text(
+      "{" + domain + R"(, "colliders": [{"capsule": {"a": [-0.1, 0.1, 0], "b": [0.1, 0.1, 0], "radius": 0.1},
+                                          "friction": 0.5}],
+      "rigid_bodies": [)" + capsule + "]}",
+      "capsule_along_capsule_collider.json");
+  const double radius = double(0.05f), top = 0.2;
+  for (const SceneDef* scene : {&on_sphere, &on_capsule, &along_capsule}) {
+    Simulation sim(*scene);
+    double lowest = INFINITY;
+    for (int f = 0; f < 60; ++f) {
+      sim.step_frame(FrameMeasure::Skip);
+      lowest = std::min(lowest, sim.body_poses()[0].position[1]);
+    }
+    const BodyPose p = sim.body_poses()[0];
+    const char* const name = scene == &on_sphere ? "sphere" : scene == &on_capsule ? "capsule" : "along";
+    EXPECT_GT(lowest, top + radius - 0.01 * radius) << name;
+    EXPECT_NEAR(p.position[1], top + radius, 0.01 * radius) << name;
+    EXPECT_NEAR(p.position[0], 0.0, 0.01 * radius) << "centred";
+    EXPECT_NEAR(p.position[2], 0.0, 0.01 * radius) << "centred";
+    EXPECT_LT(std::hypot(p.velocity[0], p.velocity[1], p.velocity[2]), 1e-3);
+  }
+}
+
 // A capsule's side against a mesh: its balls inside the segment (world_contacts.hpp). The capsule
 // of the test above dropped across the shipped cube scaled to 0.2 m, once as a mesh collider and
 // once as a fixed mesh body (each in its own scene), rests on the cube's top (y = 0.2): its axis

@@ -1,4 +1,5 @@
-// The contacts of a capsule's side with a capsule or a box (the math is in capsule_sides.hpp).
+// The contacts of a capsule's side with a capsule or a box, and with a sphere or capsule collider
+// (the math is in capsule_sides.hpp).
 #include "capsule_sides.hpp"
 
 #include <algorithm>
@@ -106,7 +107,38 @@ void capsule_on_box(const RigidBody& capsule, const SolidSurface& cs, const Rigi
   if (f_deepest < f(0.0) && f_deepest < f(1.0)) ball_contact(at(deepest), cs.radius, box, bs, capsule_is_a, out[kDeepest]);
 }
 
+// How many of the roles' contacts touch (depth > 0).
+int touching(const BoxBoxContact (&out)[kCapsuleSideRoles]) {
+  return int(std::count_if(std::begin(out), std::end(out), [](const BoxBoxContact& c) { return c.depth > 0.0; }));
+}
+
+// The capsule's ball at its segment's point closest to `target` (world) against the collider,
+// in `role`, where that point lies strictly inside the segment (else its cap ball is the contact).
+void ball_closest_to(Vec3d target, const RigidBody& capsule, const SolidSurface& cs, const RigidBody& frame,
+                     const SolidSurface& round, BoxBoxContact& out) {
+  const Vec3d from = capsule.world_point(cs.a), along = capsule.world_point(cs.b) - from;
+  const double length_squared = dot(along, along);
+  if (!(length_squared > 0.0)) return;
+  const double t = dot(target - from, along) / length_squared;
+  if (t > 0.0 && t < 1.0) ball_contact(from + t * along, cs.radius, frame, round, true, out);
+}
+
 }  // namespace
+
+int capsule_round_collider_contacts(const RigidBody& capsule, const SolidSurface& capsule_solid, const RigidBody& frame,
+                                    const SolidSurface& round, BoxBoxContact (&out)[kCapsuleSideRoles]) {
+  for (BoxBoxContact& c : out) c = BoxBoxContact{};
+  if (round.shape == Shape::Sphere) {
+    ball_closest_to(frame.world_point(round.a), capsule, capsule_solid, frame, round, out[kDeepest]);
+  } else if (round.shape == Shape::Capsule) {
+    capsules_crossed(capsule, capsule_solid, frame, round, out[kDeepest]);
+    if (!(out[kDeepest].depth > 0.0)) {  // not crossed inside both: the collider's ends
+      ball_closest_to(frame.world_point(round.a), capsule, capsule_solid, frame, round, out[kFirst]);
+      ball_closest_to(frame.world_point(round.b), capsule, capsule_solid, frame, round, out[kLast]);
+    }
+  }
+  return touching(out);
+}
 
 bool has_capsule_sides(const SolidSurface& a, const SolidSurface& b) {
   return (a.shape == Shape::Capsule && (b.shape == Shape::Capsule || b.shape == Shape::Box)) ||
@@ -122,7 +154,7 @@ int capsule_side_contacts(const RigidBody& a, const SolidSurface& solid_a, const
     capsule_on_box(a, solid_a, b, solid_b, true, out);
   else if (solid_b.shape == Shape::Capsule && solid_a.shape == Shape::Box)
     capsule_on_box(b, solid_b, a, solid_a, false, out);
-  return int(std::count_if(std::begin(out), std::end(out), [](const BoxBoxContact& c) { return c.depth > 0.0; }));
+  return touching(out);
 }
 
 }  // namespace seiche::rigid

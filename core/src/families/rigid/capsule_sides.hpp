@@ -1,5 +1,6 @@
 // The contacts of a capsule's side (its segment between the cap centres) with another capsule or
-// a box (between bodies, and against a box collider seen as a body: world_contacts.hpp), which the
+// a box (between bodies, and against a box collider seen as a body: world_contacts.hpp), and with
+// a sphere or capsule collider (world_contacts.hpp), which the
 // capsule's contact balls at its cap centres miss: two capsules crossed side on side, or a capsule
 // lying across a box's edge or over a face narrower than the capsule, have no cap centre near the
 // other body. Where a segment end is the closest
@@ -21,6 +22,15 @@
 //     capsule across a narrower box: one at each edge); t* adds the deepest point where it is
 //     strictly below both segment ends (a capsule across an edge). Each of those inside (0, 1)
 //     is a ball of the capsule's radius against the box (world_surfaces.hpp's penetration()).
+//   Capsule against a sphere or capsule collider (world_contacts.hpp: a collider has no cap balls
+//     of its own): against a sphere of centre c, the segment's point closest to c, t* =
+//     clamp((c - P).d / d.d, 0, 1), where it lies strictly inside (0 < t* < 1; else the closest
+//     point is an end: its cap ball); against a capsule, the two segments' closest points as two
+//     capsules crossed (t*), and where they do not cross inside both, the closest point lies at an
+//     end of one of them: of the body's, its cap ball; of the collider's, the body segment's point
+//     closest to that end (t_0 for the collider's first end, t_1 for its second; a capsule lying
+//     along a shorter one rests on both). Each of these a ball of the capsule's radius against the
+//     collider's solid (world_surfaces.hpp's penetration(): exact for a ball).
 // Every contact in a fixed role (t_0, t_1, t*; the crossing of two capsules is t*'s), so that a
 // pair's slot for it (body_contacts.hpp) keeps its meaning from one pass to the next.
 #pragma once
@@ -40,5 +50,11 @@ bool has_capsule_sides(const SolidSurface& a, const SolidSurface& b);
 /// per role; a role without contact has depth 0. Returns how many have depth > 0.
 int capsule_side_contacts(const RigidBody& a, const SolidSurface& solid_a, const RigidBody& b,
                           const SolidSurface& solid_b, BoxBoxContact (&out)[kCapsuleSideRoles]);
+
+/// The side contacts of capsule body `capsule` (its solid in its body frame) with a sphere or
+/// capsule collider seen as a body (`round`: its solid about `frame`), one per role (above); a
+/// role without contact has depth 0. Returns how many have depth > 0.
+int capsule_round_collider_contacts(const RigidBody& capsule, const SolidSurface& capsule_solid, const RigidBody& frame,
+                                    const SolidSurface& round, BoxBoxContact (&out)[kCapsuleSideRoles]);
 
 }  // namespace seiche::rigid

@@ -92,13 +92,15 @@ WorldContacts::WorldContacts(const SceneDef& scene, double substep,
   first_point_.push_back(int(points_.size()));
   for (int s = 0; s < surfaces_.count(); ++s) {
     const SolidSurface& world = surfaces_.solid(s);
-    BoxFrame box;
-    if (world.shape == ColliderDef::Shape::Box) {
-      box.frame.x = 0.5 * (world.a + world.b);
-      box.solid = world;
-      box.solid.a = world.a - box.frame.x, box.solid.b = world.b - box.frame.x;
+    ColliderFrame collider;
+    if (world.shape == ColliderDef::Shape::Box || world.shape == ColliderDef::Shape::Capsule ||
+        world.shape == ColliderDef::Shape::Sphere) {
+      collider.frame.x = world.shape == ColliderDef::Shape::Sphere ? world.a : 0.5 * (world.a + world.b);
+      collider.solid = world;
+      collider.solid.a = world.a - collider.frame.x;
+      if (world.shape != ColliderDef::Shape::Sphere) collider.solid.b = world.b - collider.frame.x;
     }
-    box_frames_.push_back(box);
+    collider_frames_.push_back(collider);
   }
   slots_.resize(points_.size() * std::size_t(surfaces_.count()));
   pairs_.resize(scene.rigid_bodies.size() * std::size_t(surfaces_.count()));
@@ -157,13 +159,20 @@ void WorldContacts::solve_positions(std::vector<RigidBody>& bodies) {
           touch(point, s, c.centre - c.radius * rotate_back(before.q, pen.normal), pen.normal, pen.depth);
         }
       }
-      // A capsule's side against the box colliders (capsule_sides.hpp; against a mesh its axis
-      // balls above; against the domain's walls and a plane its cap balls are the deepest points).
+      // A capsule's side against the box, sphere and capsule colliders (capsule_sides.hpp; against
+      // a mesh its axis balls above; against the domain's walls and a plane its cap balls are the
+      // deepest points).
       for (int s = 0; first_side >= 0 && s < surfaces; ++s) {
-        if (!near_[std::size_t(s)] || surfaces_.solid(s).shape != ColliderDef::Shape::Box) continue;
-        const BoxFrame& box = box_frames_[std::size_t(s)];
+        const ColliderDef::Shape shape = surfaces_.solid(s).shape;
+        if (!near_[std::size_t(s)] || (shape != ColliderDef::Shape::Box && shape != ColliderDef::Shape::Sphere &&
+                                       shape != ColliderDef::Shape::Capsule))
+          continue;
+        const ColliderFrame& collider = collider_frames_[std::size_t(s)];
         BoxBoxContact found[kCapsuleSideRoles];
-        capsule_side_contacts(before, capsule_solid_[k], box.frame, box.solid, found);
+        if (shape == ColliderDef::Shape::Box)
+          capsule_side_contacts(before, capsule_solid_[k], collider.frame, collider.solid, found);
+        else
+          capsule_round_collider_contacts(before, capsule_solid_[k], collider.frame, collider.solid, found);
         for (int role = 0; role < kCapsuleSideRoles; ++role) {
           if (!(found[role].depth > 0.0)) continue;
           sides = true;

@@ -13,7 +13,11 @@
 //     the cap centres, n = ceil(length / rho) (steps of at most rho: at a sharp ridge between two
 //     balls the capsule sinks by up to (1 - sqrt(3)/2) rho = 0.13 rho), tested against meshes
 //     only (and by the body contacts against mesh bodies only);
-//   - against a sphere or a capsule collider, nothing (a known limit: it rests on its cap balls).
+//   - against a sphere collider, the segment's point closest to its centre, and against a
+//     capsule collider, the two segments' closest points (crossed inside both) or else the body
+//     segment's points closest to the collider's ends (capsule_sides.hpp; exact: a ball against
+//     the collider's solid), the collider seen as a body at its centre with the world's axes,
+//     one point slot per role.
 // Every iteration, body by body in scene order (serial: the same bits at any thread count),
 // with a point's centre c = x + R r_c against each surface its bounding ball (its extent, grown
 // by half) reaches:
@@ -22,7 +26,7 @@
 //     dlambda_n = d / w (zero compliance), the impulse dlambda_n n at r (body_correction.hpp).
 //     All of a body's points from the same pose, applied together (Jacobi), and again until no
 //     point is deeper than 1e-12 m (at most 32 passes). A pass in which a capsule's side point
-//     (box collider) touches scales its impulses by the step s that fits the depths best, as the
+//     (box, sphere or capsule collider) touches scales its impulses by the step s that fits the depths best, as the
 //     body contacts do (body_contacts.hpp): with dd_j the change of point j's depth under all the
 //     impulses together, s = sum d_j dd_j / sum dd_j^2, at most 1 (two side points near the
 //     centre of a capsule pushed it 1.55 times as far as needed, and it bounced every substep);
@@ -141,7 +145,8 @@ class WorldContacts {
   }
 
   WorldSurfaces surfaces_;
-  struct BoxFrame {  // a box collider as a body: its centre, the world's axes, the box about it
+  // A box, sphere or capsule collider as a body: its centre, the world's axes, the solid about it.
+  struct ColliderFrame {
     RigidBody frame;
     SolidSurface solid;
   };
@@ -153,7 +158,7 @@ class WorldContacts {
                                           // its side roles' or the end: none)
   std::vector<int> first_side_point_;     // per body: its side roles' first point (a capsule), else -1
   std::vector<SolidSurface> capsule_solid_;  // per body: its solid in its frame (a capsule's only)
-  std::vector<BoxFrame> box_frames_;      // per surface: a box collider's (others unused)
+  std::vector<ColliderFrame> collider_frames_;  // per surface: a box, sphere or capsule's (others unused)
   std::vector<char> near_;                // per surface: the body now within reach of it
   std::vector<Vec3d> v_before_, omega_before_;  // per body, at the start of the substep
   std::vector<Slot> slots_;
