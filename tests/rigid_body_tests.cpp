@@ -3120,7 +3120,8 @@ TEST(FluidBody, MemoryEstimateCountsTheBoundaryTheFieldsAndThePairs) {
   };
   const MemoryEstimate::Item* field = item(mesh_estimate, "rigid_bodies[0].mesh.file");
   ASSERT_NE(field, nullptr);
-  const kernels::SdfGrid& grid = body_mesh_sdf(with_mesh.rigid_bodies[0], 0)->grid;
+  const auto mesh_field = body_mesh_sdf(with_mesh.rigid_bodies[0], 0);  // kept: the grid is its member
+  const kernels::SdfGrid& grid = mesh_field->grid;
   EXPECT_EQ(field->bytes, 8u * std::uint64_t(grid.dims[0]) * std::uint64_t(grid.dims[1]) * std::uint64_t(grid.dims[2]));
   ASSERT_NE(item(mesh_estimate, "rigid_bodies[0].mesh.scale"), nullptr);  // its boundary
 
