@@ -3128,7 +3128,8 @@ TEST(FluidBody, MemoryEstimateCountsTheBoundaryTheFieldsAndThePairs) {
   // A shape in the fluid: 16 bytes per particle and 44 per pair, 2 x 4/3 pi 2^3 = 67 pairs each.
   const SceneDef with_shape = load_scene_text("{" + fluid + R"(, "shapes": [{"box": {"min": [0.5, 0.5, 0.5],
     "max": [0.6, 0.6, 0.6]}, "spacing": 0.02}]})", "shape.json");
-  const MemoryEstimate::Item* pairs = item(estimate_scene_memory(with_shape), "shapes[0].spacing", "fluid pairs");
+  const MemoryEstimate shape_estimate = estimate_scene_memory(with_shape);  // kept: item() points into it
+  const MemoryEstimate::Item* pairs = item(shape_estimate, "shapes[0].spacing", "fluid pairs");
   ASSERT_NE(pairs, nullptr);
   const double shape_particles = double(shape_site_count(with_shape.shapes[0]));
   EXPECT_NEAR(double(pairs->bytes), shape_particles * (16.0 + 44.0 * 2.0 * 4.0 / 3.0 * std::numbers::pi * 8.0), 1.0);
